@@ -1,0 +1,17 @@
+"""sandwichctl: sandwich systems with backlash-like hysteresis for python-control.
+
+A sandwich system is a linear block L1, a backlash, and a linear block L2
+in series. sandwichctl models them as python-control I/O systems,
+simulates them fast, identifies them from data with the nonsmooth
+recursive method of the paper in ``shared/paper`` (and better estimators),
+and designs inverse-backlash compensators.
+
+>>> import control as ct
+>>> import sandwichctl as sw
+"""
+
+from . import examples
+from .backlash import *
+from .sandwich import *
+
+__version__ = '0.1.0'

@@ -1,0 +1,233 @@
+r"""The backlash-like hysteresis of eq. (2.2), as a pure function and as a
+python-control nonlinear I/O system.
+
+Eq. (2.2) with the switching functions of eq. (2.4) reads
+
+.. math::
+
+    v(k) = \begin{cases}
+      m_1 (x(k) - D_1) & x(k) > v(k-1)/m_1 + D_1 \text{ and } x(k) > x(k-1)
+                         \quad\text{(increase zone)}\\
+      m_2 (x(k) + D_2) & x(k) < v(k-1)/m_2 - D_2 \text{ and } x(k) < x(k-1)
+                         \quad\text{(decrease zone)}\\
+      v(k-1)           & \text{otherwise} \quad\text{(memory zone)}
+    \end{cases}
+
+`backlash_step` is the only implementation of this equation in the
+package; the python-control system, the simulation kernel, the
+identifiers and the compensator all call it.
+
+Crossing slope lines
+--------------------
+When :math:`m_1 \ne m_2` the lines :math:`v = m_1(x - D_1)` and
+:math:`v = m_2(x + D_2)` meet at
+
+.. math:: x^\ast = \frac{m_1 D_1 + m_2 D_2}{m_1 - m_2}.
+
+On the far side of :math:`x^\ast` (:math:`x < x^\ast` if :math:`m_1 < m_2`,
+:math:`x > x^\ast` if :math:`m_1 > m_2`) the increase line lies *above*
+the decrease line and the band between them is empty. Eq. (2.2) stays
+well defined there because each zone also asks for the direction of
+motion: a rising input follows the increase line, a falling one the
+decrease line, and v(k) jumps between the lines when the direction
+reverses. The clamp form ``clip(v(k-1), m1*(x-D1), m2*(x+D2))`` agrees
+with eq. (2.2) only where :math:`m_1(x-D_1) \le m_2(x+D_2)`; sandwichctl
+always follows eq. (2.2). See `Backlash.crossing`.
+"""
+
+import numba
+import numpy as np
+import control as ct
+
+from ._validation import check_positive, check_nonnegative, check_signal
+
+__all__ = ['Backlash', 'backlash_response', 'INCREASE', 'MEMORY', 'DECREASE']
+
+#: Zone codes returned by `backlash_response` (eq. (2.2)).
+INCREASE, MEMORY, DECREASE = 1, 0, -1
+
+
+@numba.njit(cache=True, inline='always')
+def backlash_step(x, x_prev, v_prev, m1, m2, D1, D2):
+    """One step of eq. (2.2): return ``(v, zone)``.
+
+    `zone` is 1 in the increase zone, -1 in the decrease zone and 0 in the
+    memory zone (eq. (2.4): g1 = 1, g2 = 1, or neither).
+    """
+    if x > x_prev and x > v_prev / m1 + D1:
+        return m1 * (x - D1), 1
+    if x < x_prev and x < v_prev / m2 - D2:
+        return m2 * (x + D2), -1
+    return v_prev, 0
+
+
+@numba.njit(cache=True)
+def _backlash_loop(x, m1, m2, D1, D2, x_prev, v_prev, v, zone):
+    for k in range(x.size):
+        v_prev, z = backlash_step(x[k], x_prev, v_prev, m1, m2, D1, D2)
+        x_prev = x[k]
+        v[k] = v_prev
+        zone[k] = z
+
+
+def backlash_response(x, m1, m2, D1, D2, x_prev=0.0, v_prev=0.0,
+                      return_zones=False):
+    """Backlash output for a whole input sequence (eq. (2.2)).
+
+    Parameters
+    ----------
+    x : array_like, shape (N,)
+        Backlash input x(0), ..., x(N-1).
+    m1, m2 : float
+        Slopes of the increase and decrease lines, 0 < m < inf.
+    D1, D2 : float
+        Thresholds (half-widths) of the increase and decrease lines, >= 0.
+    x_prev, v_prev : float, optional
+        The memory: x(-1) and v(-1). Default 0, 0.
+    return_zones : bool, optional
+        Also return the zone of every sample (1 increase, 0 memory,
+        -1 decrease).
+
+    Returns
+    -------
+    v : ndarray, shape (N,)
+        Backlash output.
+    zones : ndarray of int8, shape (N,)
+        Only if `return_zones` is True.
+
+    Examples
+    --------
+    >>> import sandwichctl as sw
+    >>> sw.backlash_response([0.0, 1.0, 2.0, 1.5, 0.0], 1, 1, 0.5, 0.5)
+    array([0. , 0.5, 1.5, 1.5, 0.5])
+    """
+    m1 = check_positive('m1', m1)
+    m2 = check_positive('m2', m2)
+    D1 = check_nonnegative('D1', D1)
+    D2 = check_nonnegative('D2', D2)
+    x = check_signal('x', x)
+    v = np.empty_like(x)
+    zones = np.empty(x.size, dtype=np.int8)
+    _backlash_loop(x, m1, m2, D1, D2, float(x_prev), float(v_prev), v, zones)
+    return (v, zones) if return_zones else v
+
+
+def _backlash_update(t, state, inp, params):
+    v, _ = backlash_step(inp[0], state[0], state[1], params['m1'],
+                         params['m2'], params['D1'], params['D2'])
+    return np.array([inp[0], v])
+
+
+def _backlash_output(t, state, inp, params):
+    v, _ = backlash_step(inp[0], state[0], state[1], params['m1'],
+                         params['m2'], params['D1'], params['D2'])
+    return np.array([v])
+
+
+class Backlash(ct.NonlinearIOSystem):
+    r"""Backlash-like hysteresis of eq. (2.2) as a discrete-time I/O system.
+
+    The system has one input x, one output v and two states that hold the
+    memory, x(k-1) and v(k-1). Its output is a pure function of (state,
+    input), so python-control may evaluate it as often as it likes; the
+    memory is set with ``initial_state`` like any other state.
+
+    Parameters
+    ----------
+    m1, m2 : float
+        Slopes of the increase and decrease lines, 0 < m1, m2 < inf.
+    D1, D2 : float
+        Thresholds of the increase and decrease lines, 0 <= D < inf. The
+        increase line is v = m1 (x - D1), the decrease line v = m2 (x + D2).
+    dt : float or True, optional
+        Sampling time; True (default) means discrete with unspecified
+        sampling time, which adopts the sampling time of the systems it is
+        connected to.
+    name : str, optional
+        System name.
+    inputs, outputs : str, optional
+        Signal names; default 'x' and 'v'.
+    states : list of str, optional
+        State names; default ['x_prev', 'v_prev'].
+
+    See Also
+    --------
+    backlash_response : the same map over a whole sequence.
+    SandwichSystem : L1, this backlash, and L2 in series.
+
+    Notes
+    -----
+    Where the slope lines cross (m1 != m2) the model follows eq. (2.2)
+    exactly; see `crossing` and the module notes.
+
+    Examples
+    --------
+    >>> import numpy as np, control as ct, sandwichctl as sw
+    >>> bl = sw.Backlash(1.0, 1.0, 0.5, 0.5, dt=1)
+    >>> resp = ct.input_output_response(bl, np.arange(5), [0, 1, 2, 1.5, 0])
+    >>> print(resp.outputs)
+    [0.  0.5 1.5 1.5 0.5]
+    """
+
+    def __init__(self, m1, m2, D1, D2, dt=True, name=None, inputs='x',
+                 outputs='v', states=('x_prev', 'v_prev')):
+        params = {'m1': check_positive('m1', m1),
+                  'm2': check_positive('m2', m2),
+                  'D1': check_nonnegative('D1', D1),
+                  'D2': check_nonnegative('D2', D2)}
+        if dt is None or dt is False or (dt is not True and not dt > 0):
+            raise ValueError(
+                f"dt must be a positive sampling time or True (discrete, "
+                f"unspecified); got {dt!r}. The backlash of eq. (2.2) is a "
+                f"discrete-time map")
+        super().__init__(
+            _backlash_update, _backlash_output, inputs=inputs,
+            outputs=outputs, states=list(states), dt=dt, name=name,
+            params=params)
+
+    # Read-only views of the parameters (they live in params so that
+    # ct.input_output_response(..., params=...) can override them).
+    m1 = property(lambda self: self.params['m1'], doc="Increase slope.")
+    m2 = property(lambda self: self.params['m2'], doc="Decrease slope.")
+    D1 = property(lambda self: self.params['D1'], doc="Increase threshold.")
+    D2 = property(lambda self: self.params['D2'], doc="Decrease threshold.")
+
+    @property
+    def crossing(self):
+        """The x where the two slope lines cross, or None if m1 == m2.
+
+        Beyond this point the band between the lines is empty and eq. (2.2)
+        switches between the lines with the direction of motion.
+        """
+        if self.m1 == self.m2:
+            return None
+        return ((self.m1 * self.D1 + self.m2 * self.D2)
+                / (self.m1 - self.m2))
+
+    def response(self, x, x_prev=0.0, v_prev=0.0, return_zones=False):
+        """Output for a whole input sequence; see `backlash_response`."""
+        return backlash_response(x, self.m1, self.m2, self.D1, self.D2,
+                                 x_prev, v_prev, return_zones)
+
+    def copy_with(self, **changes):
+        """Return a new Backlash with some of m1, m2, D1, D2 changed."""
+        values = {key: self.params[key] for key in ('m1', 'm2', 'D1', 'D2')}
+        unknown = set(changes) - set(values)
+        if unknown:
+            raise TypeError(f"unknown backlash parameter(s) {sorted(unknown)};"
+                            f" expected some of m1, m2, D1, D2")
+        values.update(changes)
+        return Backlash(dt=self.dt, **values)
+
+    def __repr__(self):
+        return (f"Backlash(m1={self.m1:.6g}, m2={self.m2:.6g}, "
+                f"D1={self.D1:.6g}, D2={self.D2:.6g}, dt={self.dt!r}, "
+                f"name={self.name!r})")
+
+    def __str__(self):
+        return (f"<Backlash>: {self.name}\n"
+                f"  v = m1 (x - D1) rising, v = m2 (x + D2) falling, "
+                f"else held (eq. 2.2)\n"
+                f"  m1 = {self.m1:.6g}, m2 = {self.m2:.6g}, "
+                f"D1 = {self.D1:.6g}, D2 = {self.D2:.6g}\n"
+                f"  dt = {self.dt}")

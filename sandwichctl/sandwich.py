@@ -1,0 +1,436 @@
+r"""The sandwich system L1 -> backlash -> L2 of Section 2.
+
+Mapping between eq. (2.1) and python-control
+--------------------------------------------
+Eq. (2.1) writes L1 as the difference equation
+
+.. math:: x(k) = -\sum_{i=1}^{n_a} a_i x(k-i)
+                 + \sum_{j=0}^{n_b} b_j u(k-q_1-j),
+
+which is the transfer function, in python-control's descending powers
+of z, with :math:`n = \max(n_a, q_1 + n_b)`,
+
+.. math:: L_1(z) = \frac{b_0 z^{n-q_1} + b_1 z^{n-q_1-1} + \dots
+                         + b_{n_b} z^{n-q_1-n_b}}
+                        {z^n + a_1 z^{n-1} + \dots + a_{n_a} z^{n-n_a}}.
+
+So the delay :math:`q_1` is the relative degree (a pole at zero per
+sample of delay), :math:`b_0` is the leading non-zero numerator
+coefficient and trailing zeros of either polynomial are dropped. The
+paper's :math:`x(k) = -0.1x(k-1) - 0.2x(k-2) + 1.5u(k-1)` is
+``ct.tf([1.5, 0], [1, 0.1, 0.2], dt)``: note the trailing 0, since
+``[1.5]`` alone would mean two samples of delay. L2 maps v to y the same
+way with :math:`(c, d, q_2)` in place of :math:`(a, b, q_1)`.
+"""
+
+import numpy as np
+import control as ct
+
+from .backlash import Backlash
+from ._kernel import simulate_kernel
+from ._validation import (check_discrete_siso_tf, check_int, check_signal,
+                          check_vector, common_dt)
+
+__all__ = ['SandwichSystem', 'theta_labels']
+
+
+class SandwichSystem(ct.InterconnectedSystem):
+    r"""Sandwich system: linear L1, backlash (eq. (2.2)), linear L2.
+
+    The object *is* a python-control interconnected I/O system (input 'u',
+    output 'y'), so ``ct.input_output_response``, ``ct.interconnect`` and
+    ``ct.feedback`` accept it. Its state vector is
+    ``[L1 states, x(k-1), v(k-1), L2 states]`` where the L1 and L2 states
+    are those of ``ct.ss(L1)`` and ``ct.ss(L2)``; see `state_labels`.
+
+    Parameters
+    ----------
+    L1, L2 : control.TransferFunction
+        SISO, proper, discrete-time transfer functions with the same dt.
+        L1 maps u to x and L2 maps v to y.
+    backlash : Backlash
+        The backlash between them. Its dt must agree (or be True).
+    name : str, optional
+        System name.
+    inputs, outputs : str, optional
+        Names of the input and output signals (default 'u' and 'y').
+
+    Attributes
+    ----------
+    L1, L2 : control.TransferFunction
+        The linear blocks, as given.
+    backlash : Backlash
+        The backlash block.
+    orders : dict
+        na, nb, nc, nd, q1, q2 read from L1 and L2 (eq. (2.1)).
+
+    See Also
+    --------
+    SandwichSystem.from_coefficients : build from the paper's coefficients.
+    SandwichSystem.from_theta : build from the parameter vector (2.5).
+
+    Examples
+    --------
+    >>> import control as ct, sandwichctl as sw
+    >>> L1 = ct.tf([1.5, 0], [1, 0.1, 0.2], 1)
+    >>> L2 = ct.tf([2, -0.1], [1, 1.2, 0.32], 1)
+    >>> plant = sw.SandwichSystem(L1, sw.Backlash(1, 1.2, 0.5, 0.6), L2)
+    >>> plant.orders
+    {'na': 2, 'nb': 0, 'nc': 2, 'nd': 1, 'q1': 1, 'q2': 1}
+    >>> print(plant)  # doctest: +NORMALIZE_WHITESPACE
+    SandwichSystem sys...: u -> y, dt = 1
+      L1: x(k) = -0.1 x(k-1) - 0.2 x(k-2) + 1.5 u(k-1)
+      B:  v(k) = backlash(x(k)) with m1 = 1, m2 = 1.2, D1 = 0.5, D2 = 0.6
+      L2: y(k) = -1.2 y(k-1) - 0.32 y(k-2) + 2 v(k-1) - 0.1 v(k-2)
+    >>> plant.normalized().theta.round(4)
+    array([ 1.2   ,  0.32  ,  0.1   ,  0.2   ,  3.    ,  3.6   ,  0.3333,
+            0.4   , -0.05  ])
+    """
+
+    def __init__(self, L1, backlash, L2, name=None, inputs='u', outputs='y'):
+        num1, den1 = check_discrete_siso_tf('L1', L1)
+        num2, den2 = check_discrete_siso_tf('L2', L2)
+        if not isinstance(backlash, Backlash):
+            raise TypeError(
+                f"backlash must be a sandwichctl.Backlash (e.g. "
+                f"sw.Backlash(m1, m2, D1, D2)); got {type(backlash).__name__}")
+        dt = common_dt('L1', L1.dt, 'L2', L2.dt)
+        dt = common_dt('L1/L2', dt, 'backlash', backlash.dt)
+        self._L1, self._L2 = L1, L2
+        self._coef1 = _difference_coefficients(num1, den1)
+        self._coef2 = _difference_coefficients(num2, den2)
+        bl = Backlash(backlash.m1, backlash.m2, backlash.D1, backlash.D2,
+                      dt=dt, name='backlash')
+        ss1 = ct.ss(L1, inputs='u', outputs='x', name='L1')
+        ss2 = ct.ss(L2, inputs='v', outputs='y', name='L2')
+        self._matrices = tuple(
+            np.ascontiguousarray(np.asarray(M, dtype=float))
+            for sys in (ss1, ss2) for M in (sys.A, sys.B, sys.C, sys.D))
+        super().__init__(
+            [ss1, bl, ss2],
+            connections=[['backlash.x', 'L1.x'], ['L2.v', 'backlash.v']],
+            inplist=['L1.u'], outlist=['L2.y'], inputs=inputs,
+            outputs=outputs, dt=dt, name=name)
+
+    # ------------------------------------------------------------------
+    # Parts and parametrisation
+    # ------------------------------------------------------------------
+    @property
+    def L1(self):
+        """Input linear block u -> x (a ct.TransferFunction)."""
+        return self._L1
+
+    @property
+    def L2(self):
+        """Output linear block v -> y (a ct.TransferFunction)."""
+        return self._L2
+
+    @property
+    def backlash(self):
+        """The backlash block (a sw.Backlash), using current params."""
+        p = self.params
+        return Backlash(p['m1'], p['m2'], p['D1'], p['D2'], dt=self.dt)
+
+    @property
+    def coefficients(self):
+        """Coefficients of eq. (2.1) as a dict.
+
+        Keys a, b, c, d (arrays, ``b[0]`` = b0 and ``d[0]`` = d0), q1, q2
+        and the backlash parameters m1, m2, D1, D2.
+        """
+        a, b, q1 = self._coef1
+        c, d, q2 = self._coef2
+        p = self.params
+        return {'a': a.copy(), 'b': b.copy(), 'c': c.copy(), 'd': d.copy(),
+                'q1': q1, 'q2': q2, 'm1': p['m1'], 'm2': p['m2'],
+                'D1': p['D1'], 'D2': p['D2']}
+
+    @property
+    def orders(self):
+        """Orders and delays of eq. (2.1): dict with na, nb, nc, nd, q1, q2.
+
+        nb and nd count the coefficients after b0 and d0, as in eq. (2.1).
+        """
+        a, b, q1 = self._coef1
+        c, d, q2 = self._coef2
+        return {'na': a.size, 'nb': b.size - 1, 'nc': c.size,
+                'nd': d.size - 1, 'q1': q1, 'q2': q2}
+
+    @property
+    def is_normalized(self):
+        """True if b0 = d0 = 1 (the unique representation of Section 2)."""
+        return self._coef1[1][0] == 1.0 and self._coef2[1][0] == 1.0
+
+    def normalized(self):
+        """Equivalent system with b0 = d0 = 1 (Sections 2 and 5).
+
+        The gains are absorbed into the backlash: with x = b0 x' and
+        y = L2'[d0 v], the slopes become m |b0| |d0| and the thresholds
+        D / |b0|. If b0 < 0 the mirror symmetry
+        B_(m1,m2,D1,D2)(-x) = -B_(m2,m1,D2,D1)(x) swaps the two lines. From
+        zero initial state, the output is the same as the original's.
+
+        Raises
+        ------
+        ValueError
+            If b0 * d0 < 0: a backlash with positive slopes cannot absorb a
+            negative overall gain.
+        """
+        co = self.coefficients
+        b0, d0 = co['b'][0], co['d'][0]
+        if b0 * d0 < 0:
+            raise ValueError(
+                f"cannot normalise to b0 = d0 = 1: b0 = {b0:g} and "
+                f"d0 = {d0:g} have opposite signs, and a backlash with "
+                f"positive slopes cannot absorb a negative gain")
+        m1, m2, D1, D2 = co['m1'], co['m2'], co['D1'], co['D2']
+        if b0 < 0:
+            m1, m2, D1, D2 = m2, m1, D2, D1
+        sb, sd = abs(b0), abs(d0)
+        return SandwichSystem.from_coefficients(
+            a=co['a'], b=co['b'] / b0, c=co['c'], d=co['d'] / d0,
+            m1=m1 * sb * sd, m2=m2 * sb * sd, D1=D1 / sb, D2=D2 / sb,
+            q1=co['q1'], q2=co['q2'], dt=self.dt)
+
+    @property
+    def theta(self):
+        """Parameter vector of eq. (2.5) of the normalised system.
+
+        Order: c1..c_nc, a1..a_na, m1, m2, D1, D2, b1..b_nb, d1..d_nd.
+        """
+        sys = self if self.is_normalized else self.normalized()
+        co = sys.coefficients
+        return np.concatenate([co['c'], co['a'],
+                               [co['m1'], co['m2'], co['D1'], co['D2']],
+                               co['b'][1:], co['d'][1:]])
+
+    @property
+    def theta_labels(self):
+        """Names of the entries of `theta`, e.g. ['c1', ..., 'd1']."""
+        o = self.orders
+        return theta_labels(o['na'], o['nb'], o['nc'], o['nd'])
+
+    @classmethod
+    def from_coefficients(cls, a, b, c, d, m1, m2, D1, D2, q1=1, q2=1,
+                          dt=True, name=None):
+        """Build a sandwich from the coefficients of eqs. (2.1)-(2.2).
+
+        Parameters
+        ----------
+        a : array_like
+            a_1, ..., a_na of L1 (may be empty).
+        b : array_like
+            b_0, ..., b_nb of L1; b_0 must be non-zero.
+        c : array_like
+            c_1, ..., c_nc of L2 (may be empty).
+        d : array_like
+            d_0, ..., d_nd of L2; d_0 must be non-zero.
+        m1, m2, D1, D2 : float
+            Backlash parameters (see `Backlash`).
+        q1, q2 : int, optional
+            Delays of L1 and L2 in samples (default 1).
+        dt : float or True, optional
+            Sampling time (default True: discrete, unspecified).
+        name : str, optional
+            System name.
+
+        Examples
+        --------
+        >>> import sandwichctl as sw
+        >>> plant = sw.SandwichSystem.from_coefficients(
+        ...     a=[0.1, 0.2], b=[1.5], c=[1.2, 0.32], d=[2, -0.1],
+        ...     m1=1, m2=1.2, D1=0.5, D2=0.6, q1=1, q2=1, dt=1)
+        >>> plant.L1.num[0][0], plant.L1.den[0][0]
+        (array([1.5, 0. ]), array([1. , 0.1, 0.2]))
+        """
+        L1 = _tf_from_coefficients('a', a, 'b', b, 'q1', q1, dt)
+        L2 = _tf_from_coefficients('c', c, 'd', d, 'q2', q2, dt)
+        return cls(L1, Backlash(m1, m2, D1, D2, dt=dt), L2, name=name)
+
+    @classmethod
+    def from_theta(cls, theta, na, nb, nc, nd, q1=1, q2=1, dt=True,
+                   name=None):
+        """Build the normalised sandwich (b0 = d0 = 1) from eq. (2.5).
+
+        The inverse of `theta`: ``SandwichSystem.from_theta(sys.theta,
+        **sys.orders, dt=sys.dt)`` is ``sys.normalized()``.
+
+        Parameters
+        ----------
+        theta : array_like, shape (nc + na + 4 + nb + nd,)
+            c1..c_nc, a1..a_na, m1, m2, D1, D2, b1..b_nb, d1..d_nd.
+        na, nb, nc, nd : int
+            Orders of eq. (2.1).
+        q1, q2 : int, optional
+            Delays (default 1).
+        dt : float or True, optional
+            Sampling time.
+        name : str, optional
+            System name.
+        """
+        na, nb, nc, nd = (check_int(n, v) for n, v in
+                          zip(('na', 'nb', 'nc', 'nd'), (na, nb, nc, nd)))
+        theta = check_vector('theta', theta, nc + na + 4 + nb + nd)
+        c, a = theta[:nc], theta[nc:nc + na]
+        m1, m2, D1, D2 = theta[nc + na:nc + na + 4]
+        b = np.concatenate([[1.0], theta[nc + na + 4:nc + na + 4 + nb]])
+        d = np.concatenate([[1.0], theta[nc + na + 4 + nb:]])
+        return cls.from_coefficients(a, b, c, d, m1, m2, D1, D2, q1, q2,
+                                     dt=dt, name=name)
+
+    # ------------------------------------------------------------------
+    # Simulation
+    # ------------------------------------------------------------------
+    def simulate(self, inputs, initial_state=None, timepts=None,
+                 internal=False, return_states=False):
+        """Fast simulation of the sandwich (compiled kernel).
+
+        Gives the same result as ``ct.input_output_response(self, timepts,
+        inputs, initial_state)`` (to rounding), about four orders of
+        magnitude faster.
+
+        Parameters
+        ----------
+        inputs : array_like, shape (N,)
+            Input u(0), ..., u(N-1).
+        initial_state : array_like or None, optional
+            Full state at k = 0, laid out as `state_labels` says:
+            ``[L1 states, x(-1), v(-1), L2 states]``. Default zeros.
+        timepts : array_like, optional
+            Time points, only used to label the result; default
+            ``dt * arange(N)``.
+        internal : bool, optional
+            If True, the outputs are the three signals y, x and v (rows in
+            that order); otherwise just y.
+        return_states : bool, optional
+            Also store the state trajectory in the result (memory N x
+            nstates).
+
+        Returns
+        -------
+        control.TimeResponseData
+            ``resp.outputs`` is y (or y, x, v); ``resp.final_state`` is the
+            state after the last sample, ready to continue the simulation.
+
+        Examples
+        --------
+        >>> import numpy as np, sandwichctl as sw
+        >>> plant = sw.examples.paper_plant()
+        >>> resp = plant.simulate(np.ones(4), internal=True)
+        >>> print(resp.outputs[1])            # x = L1[u]
+        [0.    1.5   1.35  1.065]
+        """
+        u = check_signal('inputs', inputs)
+        state = self._initial_state(initial_state)
+        n = u.size
+        y = np.empty(n)
+        x, v = (np.empty(n), np.empty(n)) if internal else (y[:0], y[:0])
+        states = np.empty((n if return_states else 0, self.nstates))
+        p = self.params
+        simulate_kernel(u, *self._matrices, p['m1'], p['m2'], p['D1'],
+                        p['D2'], state, y, x, v, states)
+        if timepts is None:
+            step = 1.0 if self.dt is True else float(self.dt)
+            timepts = step * np.arange(n)
+        else:
+            timepts = check_signal('timepts', timepts, length=n)
+        outputs = np.vstack([y, x, v]) if internal else y
+        labels = ['y', 'x', 'v'] if internal else self.output_labels
+        resp = ct.TimeResponseData(
+            timepts, outputs, states.T if return_states else None, u,
+            issiso=not internal, output_labels=labels,
+            input_labels=self.input_labels,
+            state_labels=self.state_labels if return_states else None,
+            sysname=self.name, title=f"Simulation of {self.name}")
+        resp.final_state = state
+        return resp
+
+    def _initial_state(self, initial_state):
+        if initial_state is None or (np.isscalar(initial_state)
+                                     and initial_state == 0):
+            return np.zeros(self.nstates)
+        return check_vector('initial_state', initial_state, self.nstates)
+
+    # ------------------------------------------------------------------
+    # Display
+    # ------------------------------------------------------------------
+    def __str__(self):
+        co = self.coefficients
+        dt = 'True (unspecified)' if self.dt is True else f"{self.dt:g}"
+        return (
+            f"SandwichSystem {self.name}: {self.input_labels[0]} -> "
+            f"{self.output_labels[0]}, dt = {dt}\n"
+            f"  L1: {_difference_equation('x', 'u', co['a'], co['b'], co['q1'])}\n"
+            f"  B:  v(k) = backlash(x(k)) with m1 = {co['m1']:.6g}, "
+            f"m2 = {co['m2']:.6g}, D1 = {co['D1']:.6g}, D2 = {co['D2']:.6g}\n"
+            f"  L2: {_difference_equation('y', 'v', co['c'], co['d'], co['q2'])}")
+
+    __repr__ = __str__
+
+
+def theta_labels(na, nb, nc, nd):
+    """Names of the entries of the parameter vector of eq. (2.5).
+
+    Examples
+    --------
+    >>> import sandwichctl as sw
+    >>> sw.theta_labels(na=2, nb=0, nc=2, nd=1)
+    ['c1', 'c2', 'a1', 'a2', 'm1', 'm2', 'D1', 'D2', 'd1']
+    """
+    return ([f"c{i}" for i in range(1, nc + 1)]
+            + [f"a{i}" for i in range(1, na + 1)]
+            + ['m1', 'm2', 'D1', 'D2']
+            + [f"b{i}" for i in range(1, nb + 1)]
+            + [f"d{i}" for i in range(1, nd + 1)])
+
+
+def _difference_coefficients(num, den):
+    """(a, b, q) of eq. (2.1) from normalised descending num, den."""
+    q = den.size - num.size
+    b = np.trim_zeros(num, 'b')
+    a = np.trim_zeros(den[1:], 'b')
+    return a, b, q
+
+
+def _tf_from_coefficients(aname, a, bname, b, qname, q, dt):
+    a = np.atleast_1d(np.asarray(a, dtype=float)) if np.size(a) else \
+        np.zeros(0)
+    b = np.atleast_1d(np.asarray(b, dtype=float))
+    q = check_int(qname, q)
+    if a.ndim != 1 or not np.all(np.isfinite(a)):
+        raise ValueError(f"{aname} must be a finite 1-D sequence; got {a}")
+    if b.ndim != 1 or b.size == 0 or not np.all(np.isfinite(b)):
+        raise ValueError(
+            f"{bname} must be a finite, non-empty 1-D sequence; got {b}")
+    if b[0] == 0:
+        raise ValueError(
+            f"{bname}[0] is 0, but eq. (2.1) needs the leading coefficient "
+            f"{bname}0 != 0 (it is normalised to 1); express a delay with "
+            f"{qname} instead of leading zeros")
+    if dt is None or dt is False or (dt is not True and not dt > 0):
+        raise ValueError(f"dt must be a positive sampling time or True; "
+                         f"got {dt!r}")
+    n = max(a.size, q + b.size - 1)
+    den = np.zeros(n + 1)
+    den[0] = 1.0
+    den[1:a.size + 1] = a
+    num = np.zeros(n + 1)
+    num[q:q + b.size] = b
+    return ct.tf(num, den, dt)
+
+
+def _difference_equation(out, inp, a, b, q):
+    """Render eq. (2.1) as text, e.g. 'x(k) = - 0.1 x(k-1) + 1.5 u(k-1)'."""
+    terms = [(-ai, f"{out}(k-{i})") for i, ai in enumerate(a, 1)]
+    terms += [(bj, f"{inp}(k{-(q + j):+d})" if q + j else f"{inp}(k)")
+              for j, bj in enumerate(b)]
+    parts = []
+    for coef, sig in terms:
+        if coef == 0:
+            continue
+        if parts:
+            parts.append(f"{'-' if coef < 0 else '+'} {abs(coef):.6g} {sig}")
+        else:
+            parts.append(f"{coef:.6g} {sig}")
+    text = ' '.join(parts)
+    return f"{out}(k) = {text or '0'}"
