@@ -10,8 +10,12 @@ and designs inverse-backlash compensators.
 >>> import sandwichctl as sw
 """
 
-from . import examples
+from . import examples, study
 from .backlash import *
 from .sandwich import *
+from .validation import *
+from .plotting import *
+from .io import *
+from .identify import *
 
 __version__ = '0.1.0'

@@ -8,7 +8,7 @@ import numpy as np
 from .sandwich import SandwichSystem
 from ._validation import check_int, check_positive
 
-__all__ = ['paper_plant', 'paper_input', 'PAPER_THETA0']
+__all__ = ['paper_plant', 'paper_input', 'add_noise', 'PAPER_THETA0']
 
 #: Starting point theta_0 of the Section 5 study (order of eq. (2.5)).
 PAPER_THETA0 = np.array([0, 0, 0, 0, 0.1, 0.1, 0.1, 0.1, 0.0])
@@ -60,3 +60,37 @@ def paper_input(n, variance=0.49, seed=None):
     variance = check_positive('variance', variance)
     rng = np.random.default_rng(seed)
     return np.sqrt(variance) * rng.standard_normal(n)
+
+
+def add_noise(y, snr, seed=None):
+    """Add white Gaussian output noise at a given signal-to-noise ratio.
+
+    The SNR is the variance ratio var(y) / var(noise), the natural
+    reading of Section 5's "SNR equal to 46.5".
+
+    Parameters
+    ----------
+    y : array_like
+        Noise-free output.
+    snr : float
+        Variance ratio, > 0.
+    seed : int or numpy.random.Generator, optional
+        Seed for `numpy.random.default_rng`.
+
+    Returns
+    -------
+    ndarray
+        y plus noise of variance var(y) / snr.
+
+    Examples
+    --------
+    >>> import numpy as np, sandwichctl as sw
+    >>> y = np.sin(np.arange(100000) * 0.1)
+    >>> noisy = sw.examples.add_noise(y, 46.5, seed=0)
+    >>> round(float(np.var(y) / np.var(noisy - y)))
+    46
+    """
+    y = np.asarray(y, dtype=float)
+    snr = check_positive('snr', snr)
+    rng = np.random.default_rng(seed)
+    return y + rng.standard_normal(y.shape) * np.sqrt(np.var(y) / snr)

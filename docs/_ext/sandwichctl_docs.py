@@ -1,0 +1,222 @@
+"""Sphinx helpers for the sandwichctl documentation (local extension).
+
+1. **API pages.** At start-up, `write_api_pages` writes ``api/index.rst``
+   and one ``api/<module>.rst`` per public module of sandwichctl (every
+   ``sandwichctl/<name>.py`` whose name does not start with ``_``). Each
+   module page shows the module docstring and an autosummary table of the
+   names in the module's ``__all__``, so a new public module or name
+   appears in the docs without editing them. The files are generated
+   (``docs/api/`` is git-ignored) and are only rewritten when their text
+   changes.
+
+2. **Docstring excerpts.** The directive ::
+
+       .. sandwichctl-docstring:: sandwichctl.backlash
+          :section: Crossing slope lines
+
+   renders a module's docstring (or one of its ``----``-underlined
+   sections, without the title) as reStructuredText, section titles
+   allowed, so pages can quote the code's documentation instead of
+   copying it.
+
+3. **Notebooks.** `copy_notebooks` copies the notebooks of the folder
+   named by ``sandwichctl_notebooks`` (``../notebooks``) to
+   ``docs/notebooks/`` (git-ignored), where the toctree can list them as
+   ``notebooks/<name>``. They are rendered by myst-nb without being
+   executed.
+"""
+
+import importlib
+import inspect
+import pkgutil
+import shutil
+import textwrap
+from pathlib import Path
+
+from docutils.parsers.rst import directives
+from sphinx.util import logging
+from sphinx.util.docutils import SphinxDirective
+
+logger = logging.getLogger(__name__)
+
+#: Topic order of the API reference; modules not listed follow
+#: alphabetically, so a new module needs no change here.
+MODULE_ORDER = ['sandwich', 'backlash', 'identify', 'validation',
+                'plotting', 'io', 'examples']
+
+API_INTRO = """\
+API reference
+=============
+
+sandwichctl is used next to python-control::
+
+    import control as ct
+    import sandwichctl as sw
+
+Every public name is importable from the top level (``sw.SandwichSystem``,
+``sw.compare``, ...) except the contents of the ``examples`` module, which
+stay in their namespace (``sw.examples.paper_plant()``). The pages below
+follow the modules, one topic each; this page is generated from the
+modules' ``__all__``.
+"""
+
+
+def public_modules(package):
+    """The public submodules of `package`, in `MODULE_ORDER`."""
+    names = [info.name for info in pkgutil.iter_modules(package.__path__)
+             if not info.name.startswith('_')]
+    known = [n for n in MODULE_ORDER if n in names]
+    return known + sorted(set(names) - set(known))
+
+
+def _qualified_name(package, module, name):
+    """Name under which an object is documented.
+
+    Classes and functions re-exported by the package are documented as
+    ``package.name``; data (whose ``#:`` comments autodoc reads from the
+    defining module) and objects not re-exported keep the module path.
+    """
+    obj = getattr(module, name)
+    flat = getattr(package, name, None) is obj
+    if flat and (inspect.isclass(obj) or callable(obj)):
+        return f"{package.__name__}.{name}"
+    return f"{module.__name__}.{name}"
+
+
+def _summary(module):
+    doc = inspect.getdoc(module) or ''
+    return doc.strip().split('\n\n')[0].replace('\n', ' ')
+
+
+def _module_page(package, module):
+    title = module.__name__
+    lines = [title, '=' * len(title), '',
+             f".. py:module:: {module.__name__}", '',
+             f".. sandwichctl-docstring:: {module.__name__}", '',
+             f".. currentmodule:: {package.__name__}", '']
+    names = list(getattr(module, '__all__', []))
+    if names:
+        lines += ['Contents', '--------', '', '.. autosummary::',
+                  '   :toctree: generated', '']
+        lines += [f"   {_qualified_name(package, module, n)}"
+                  for n in names]
+    return '\n'.join(lines) + '\n'
+
+
+def _index_page(package, modules):
+    lines = [API_INTRO, 'Modules', '-------', '', '.. toctree::',
+             '   :maxdepth: 1', '']
+    lines += [f"   {name}" for name, _ in modules]
+    lines += ['', 'All public names', '----------------', '',
+              '.. autosummary::', '']
+    for _, module in modules:
+        lines += [f"   {_qualified_name(package, module, n)}"
+                  for n in getattr(module, '__all__', [])]
+    return '\n'.join(lines) + '\n'
+
+
+def _write_if_changed(path, text):
+    if not path.exists() or path.read_text(encoding='utf-8') != text:
+        path.write_text(text, encoding='utf-8')
+
+
+def write_api_pages(srcdir, package_name='sandwichctl'):
+    """Generate ``<srcdir>/api/*.rst`` from the package's modules."""
+    package = importlib.import_module(package_name)
+    outdir = Path(srcdir) / 'api'
+    outdir.mkdir(exist_ok=True)
+    modules = []
+    for name in public_modules(package):
+        module = importlib.import_module(f"{package_name}.{name}")
+        if not hasattr(module, '__all__'):
+            logger.warning(
+                f"module {module.__name__} has no __all__, so the API "
+                f"reference cannot tell its public names; add __all__ "
+                f"(see STYLE.md)")
+        modules.append((name, module))
+    wanted = {'index.rst'} | {f"{name}.rst" for name, _ in modules}
+    for stale in outdir.glob('*.rst'):
+        if stale.name not in wanted:
+            stale.unlink()
+    _write_if_changed(outdir / 'index.rst', _index_page(package, modules))
+    for name, module in modules:
+        _write_if_changed(outdir / f"{name}.rst",
+                          _module_page(package, module))
+
+
+def copy_notebooks(srcdir, notebook_dir):
+    """Mirror ``notebook_dir/*.ipynb`` into ``<srcdir>/notebooks``."""
+    source = Path(notebook_dir)
+    target = Path(srcdir) / 'notebooks'
+    target.mkdir(exist_ok=True)
+    found = {p.name: p for p in source.glob('*.ipynb')} if source.is_dir() \
+        else {}
+    for old in target.glob('*.ipynb'):
+        if old.name not in found:
+            old.unlink()
+    for name, path in found.items():
+        dest = target / name
+        if not dest.exists() or dest.read_bytes() != path.read_bytes():
+            shutil.copy2(path, dest)
+
+
+def _docstring_section(doc, title):
+    """Body of the ``----``-underlined section `title` of `doc`, or None."""
+    lines = doc.splitlines()
+
+    def is_title(i):
+        return (i + 1 < len(lines) and lines[i].strip()
+                and set(lines[i + 1].strip()) == {'-'}
+                and len(lines[i + 1].strip()) >= len(lines[i].strip()))
+
+    for i in range(len(lines)):
+        if is_title(i) and lines[i].strip() == title:
+            end = next((j for j in range(i + 2, len(lines)) if is_title(j)),
+                       len(lines))
+            return '\n'.join(lines[i + 2:end]).strip('\n')
+    return None
+
+
+class DocstringDirective(SphinxDirective):
+    """Render a module's docstring, or one section of it, as reST."""
+
+    required_arguments = 1
+    option_spec = {'section': directives.unchanged_required}
+
+    def run(self):
+        name = self.arguments[0]
+        try:
+            module = importlib.import_module(name)
+        except ImportError as exc:
+            logger.warning(f"sandwichctl-docstring: cannot import {name}: "
+                           f"{exc}", location=self.get_location())
+            return []
+        doc = textwrap.dedent(inspect.getdoc(module) or '')
+        title = self.options.get('section')
+        if title is not None:
+            doc = _docstring_section(doc, title)
+            if doc is None:
+                logger.warning(
+                    f"sandwichctl-docstring: the docstring of {name} has no "
+                    f"section {title!r} (a title underlined with '-')",
+                    location=self.get_location())
+                return []
+        source = inspect.getsourcefile(module)
+        self.env.note_dependency(source)
+        return self.parse_text_to_nodes(doc, allow_section_headings=True)
+
+
+def _on_config_inited(app, config):
+    write_api_pages(app.srcdir, config.sandwichctl_package)
+    if config.sandwichctl_notebooks:
+        copy_notebooks(app.srcdir,
+                       Path(app.confdir) / config.sandwichctl_notebooks)
+
+
+def setup(app):
+    """Register the directive, and generate the API and notebook pages."""
+    app.add_config_value('sandwichctl_package', 'sandwichctl', 'env')
+    app.add_config_value('sandwichctl_notebooks', None, 'env')
+    app.add_directive('sandwichctl-docstring', DocstringDirective)
+    app.connect('config-inited', _on_config_inited)
+    return {'parallel_read_safe': True, 'parallel_write_safe': True}

@@ -1,0 +1,221 @@
+r"""The predictor of the sandwich model and its sensitivities (private).
+
+This module is the one place that builds the model output
+:math:`\hat y(k, \theta)` and its derivative
+:math:`w(k) = \partial \hat y(k, \theta) / \partial \theta`. All estimators
+use it. Signals live in *padded* arrays: index ``pad + k`` holds sample k
+and the first ``pad`` entries are the zero past, so ``arr[t - lag]`` is
+always valid. ``o = (na, nb, nc, nd, q1, q2)`` are the orders and theta is
+ordered as eq. (2.5): c, a, (m1, m2, D1, D2), b, d, with b0 = d0 = 1.
+
+Two predictors are provided.
+
+``window_predict`` (the paper's Section 3)
+    f(k, theta) = e(k, theta)^2 / 2 is evaluated with the *stored* past of
+    the estimator: x_hat and v_hat before the window are those the
+    estimator computed when those samples were current. Only the backlash
+    outputs that enter y_hat(k) directly, v_hat(k - q2 - j) for
+    j = 0..nd (eq. (3.2)), are recomputed with theta, each from its stored
+    memory (x_hat(t-1), v_hat(t-1)). Its gradient is eqs. (3.2)-(3.3):
+    static (no recursion through past estimates) and zero in the memory
+    zone. The past outputs y*(k-i) are either measured (series-parallel)
+    or the stored predictions (parallel), see `identify`.
+
+``oe_step`` (exact output-error sensitivities)
+    Sensitivities of the simulated output carried recursively through
+    L1's dynamics, through the backlash (including its memory zone, where
+    dv(k)/dtheta = dv(k-1)/dtheta) and through L2's dynamics.
+
+At a switching point of eq. (2.2) both use the gradient of the zone that
+`backlash_step` selects, which is one of the limiting gradients and so a
+Clarke subgradient (Definition 3.1).
+"""
+
+import numba
+import numpy as np
+
+from .backlash import backlash_step
+
+__all__ = []
+
+
+@numba.njit(cache=True, inline='always')
+def _idx(o):
+    """Offsets (ia, im, ib, id) into theta for orders o."""
+    na, nb, nc, nd = o[0], o[1], o[2], o[3]
+    ia = nc
+    im = nc + na
+    ib = im + 4
+    return ia, im, ib, ib + nb
+
+
+def padding(o):
+    """Number of zero samples needed in front of the signals."""
+    na, nb, nc, nd, q1, q2 = o
+    return q1 + nb + q2 + nd + na + nc + 2
+
+
+@numba.njit(cache=True)
+def l1_output(theta, o, u, xs, t):
+    """x_hat(t) of eq. (2.1) with stored past x_hat (xs) and input u."""
+    na, nb, q1 = o[0], o[1], o[4]
+    ia, im, ib, idd = _idx(o)
+    x = u[t - q1]
+    for j in range(1, nb + 1):
+        x += theta[ib + j - 1] * u[t - q1 - j]
+    for i in range(1, na + 1):
+        x -= theta[ia + i - 1] * xs[t - i]
+    return x
+
+
+@numba.njit(cache=True)
+def window_predict(theta, o, u, ystar, xs, vs, zs, k, grad):
+    """y_hat(k, theta) of the paper's recursive predictor; see module doc.
+
+    Writes the gradient (3.2)-(3.3) into `grad`. Returns (y_hat,
+    nonsmooth) where nonsmooth is True if any recomputed backlash sample
+    switches zone with respect to the stored zone before it.
+    """
+    na, nb, nc, nd, q1, q2 = o
+    ia, im, ib, idd = _idx(o)
+    m1, m2, D1, D2 = theta[im], theta[im + 1], theta[im + 2], theta[im + 3]
+    grad[:] = 0.0
+    yhat = 0.0
+    nonsmooth = False
+    for i in range(1, nc + 1):
+        yhat -= theta[i - 1] * ystar[k - i]
+        grad[i - 1] = -ystar[k - i]
+    for j in range(nd + 1):
+        t = k - q2 - j
+        dj = 1.0 if j == 0 else theta[idd + j - 1]
+        xt = l1_output(theta, o, u, xs, t)
+        vt, zone = backlash_step(xt, xs[t - 1], vs[t - 1], m1, m2, D1, D2)
+        yhat += dj * vt
+        if j > 0:
+            grad[idd + j - 1] = vt
+        if zone != zs[t - 1]:
+            nonsmooth = True
+        if zone == 0:
+            continue                    # memory zone: (3.3) gives 0
+        m = m1 if zone == 1 else m2
+        if zone == 1:
+            grad[im] += dj * (xt - D1)
+            grad[im + 2] -= dj * m1
+        else:
+            grad[im + 1] += dj * (xt + D2)
+            grad[im + 3] += dj * m2
+        for i in range(1, na + 1):
+            grad[ia + i - 1] -= dj * m * xs[t - i]
+        for jj in range(1, nb + 1):
+            grad[ib + jj - 1] += dj * m * u[t - q1 - jj]
+    return yhat, nonsmooth
+
+
+@numba.njit(cache=True)
+def store_state(theta, o, u, ystar_src, xs, vs, zs, ys, k, grad):
+    """Store x_hat(k), v_hat(k), zone(k) and y_hat(k) for theta.
+
+    `ystar_src` is the array the predictor reads past outputs from (the
+    measured y, or `ys` itself for the parallel predictor). Returns
+    y_hat(k).
+    """
+    im = _idx(o)[1]
+    xs[k] = l1_output(theta, o, u, xs, k)
+    v, z = backlash_step(xs[k], xs[k - 1], vs[k - 1], theta[im],
+                         theta[im + 1], theta[im + 2], theta[im + 3])
+    vs[k] = v
+    zs[k] = z
+    yhat, _ = window_predict(theta, o, u, ystar_src, xs, vs, zs, k, grad)
+    ys[k] = yhat
+    return yhat
+
+
+@numba.njit(cache=True)
+def oe_step(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k):
+    """One step of the output-error (simulation) model with sensitivities.
+
+    Computes x_hat(k), v_hat(k), zone(k), y_hat(k) from the stored past
+    and their exact derivatives with respect to theta, Sx[k], Sv[k],
+    Sy[k] (rows of p entries), carried recursively through L1, the
+    backlash memory and L2. Returns y_hat(k).
+    """
+    na, nb, nc, nd, q1, q2 = o
+    ia, im, ib, idd = _idx(o)
+    m1, m2, D1, D2 = theta[im], theta[im + 1], theta[im + 2], theta[im + 3]
+    p = theta.size
+    # L1, eq. (2.1)
+    x = l1_output(theta, o, u, xs, k)
+    xs[k] = x
+    for r in range(p):
+        acc = 0.0
+        for i in range(1, na + 1):
+            acc -= theta[ia + i - 1] * Sx[k - i, r]
+        Sx[k, r] = acc
+    for i in range(1, na + 1):
+        Sx[k, ia + i - 1] -= xs[k - i]
+    for j in range(1, nb + 1):
+        Sx[k, ib + j - 1] += u[k - q1 - j]
+    # backlash, eq. (2.2)
+    v, zone = backlash_step(x, xs[k - 1], vs[k - 1], m1, m2, D1, D2)
+    vs[k] = v
+    zs[k] = zone
+    if zone == 0:
+        for r in range(p):
+            Sv[k, r] = Sv[k - 1, r]
+    else:
+        m = m1 if zone == 1 else m2
+        for r in range(p):
+            Sv[k, r] = m * Sx[k, r]
+        if zone == 1:
+            Sv[k, im] += x - D1
+            Sv[k, im + 2] -= m1
+        else:
+            Sv[k, im + 1] += x + D2
+            Sv[k, im + 3] += m2
+    # L2, eq. (2.1)
+    y = 0.0
+    for i in range(1, nc + 1):
+        y -= theta[i - 1] * ys[k - i]
+    for j in range(nd + 1):
+        dj = 1.0 if j == 0 else theta[idd + j - 1]
+        y += dj * vs[k - q2 - j]
+    ys[k] = y
+    for r in range(p):
+        acc = 0.0
+        for i in range(1, nc + 1):
+            acc -= theta[i - 1] * Sy[k - i, r]
+        for j in range(nd + 1):
+            dj = 1.0 if j == 0 else theta[idd + j - 1]
+            acc += dj * Sv[k - q2 - j, r]
+        Sy[k, r] = acc
+    for i in range(1, nc + 1):
+        Sy[k, i - 1] -= ys[k - i]
+    for j in range(1, nd + 1):
+        Sy[k, idd + j - 1] += vs[k - q2 - j]
+    return y
+
+
+@numba.njit(cache=True)
+def oe_simulate(theta, o, u, pad, xs, vs, zs, ys, Sx, Sv, Sy):
+    """Run `oe_step` over a whole padded record (fixed theta)."""
+    for k in range(pad, u.size):
+        oe_step(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k)
+
+
+def simulate_with_sensitivities(theta, o, u):
+    """Simulated output y_hat and Jacobian d y_hat / d theta (N x p).
+
+    Zero initial conditions, like the estimators. Returns (y_hat, J,
+    zones).
+    """
+    pad = padding(o)
+    n = u.size
+    up = np.zeros(pad + n)
+    up[pad:] = u
+    xs, vs, ys = np.zeros(pad + n), np.zeros(pad + n), np.zeros(pad + n)
+    zs = np.zeros(pad + n, dtype=np.int64)
+    p = theta.size
+    Sx, Sv, Sy = (np.zeros((pad + n, p)) for _ in range(3))
+    oe_simulate(np.ascontiguousarray(theta, dtype=float), o, up, pad, xs, vs,
+                zs, ys, Sx, Sv, Sy)
+    return ys[pad:].copy(), Sy[pad:].copy(), zs[pad:].copy()

@@ -1,0 +1,183 @@
+"""Compiled per-sample steps of the recursive estimators (private module).
+
+The bundle method of Section 3 is split around its QP: `bundle_prepare`
+evaluates f(k, .) and the Clarke subgradients at the current estimate
+and the stored trial points (eqs. (3.2)-(3.3)) and the locality measures
+beta_j; the caller solves the dual of (3.4) with piqp; `bundle_finish`
+forms t and phi (eqs. (3.5)-(3.6)), runs the line search (3.8) with the
+step classification of Step 3, finds the trial point of (3.10) for short
+and null steps, and stores the new estimate's internal signals.
+"""
+
+import numba
+import numpy as np
+
+from ._predictor import window_predict, store_state, oe_step, _idx
+
+__all__ = []
+
+LONG, SHORT, NULL, STOP, SKIP = 0, 1, 2, 3, 4
+
+
+@numba.njit(cache=True)
+def project(theta, o, m_min):
+    """Keep theta in the model's domain: m1, m2 >= m_min, D1, D2 >= 0."""
+    im = _idx(o)[1]
+    theta[im] = max(theta[im], m_min)
+    theta[im + 1] = max(theta[im + 1], m_min)
+    theta[im + 2] = max(theta[im + 2], 0.0)
+    theta[im + 3] = max(theta[im + 3], 0.0)
+
+
+@numba.njit(cache=True)
+def _cost(theta, o, u, ystar, y, xs, vs, zs, k, grad):
+    yhat, _ = window_predict(theta, o, u, ystar, xs, vs, zs, k, grad)
+    e = y[k] - yhat
+    return 0.5 * e * e, e
+
+
+@numba.njit(cache=True)
+def bundle_prepare(theta, trials, ntrial, s, o, u, ystar, y, xs, vs, zs, k,
+                   gamma, H, beta, grad):
+    """Subgradients h_j = -e_j w_j and locality measures of the bundle.
+
+    Row 0 is the current estimate (beta = 0); rows 1.. the stored trial
+    points that differ from it. Returns (f0, e0, n) with n the bundle
+    size.
+    """
+    f0, e0 = _cost(theta, o, u, ystar, y, xs, vs, zs, k, grad)
+    p = theta.size
+    for r in range(p):
+        H[0, r] = -e0 * grad[r]
+    beta[0] = 0.0
+    n = 1
+    for j in range(ntrial):
+        dist2 = 0.0
+        for r in range(p):
+            dist2 += (trials[j, r] - theta[r]) ** 2
+        if dist2 == 0.0:
+            continue
+        fj, ej = _cost(trials[j], o, u, ystar, y, xs, vs, zs, k, grad)
+        alpha = f0 - fj
+        for r in range(p):
+            H[n, r] = -ej * grad[r]
+            alpha -= H[n, r] * (theta[r] - trials[j, r])
+        beta[n] = max(abs(alpha), gamma * s[j] * s[j])
+        n += 1
+    return f0, e0, n
+
+
+@numba.njit(cache=True)
+def bundle_finish(theta, lam, H, beta, n, f0, e0, o, u, ystar, y, xs, vs,
+                  zs, ys, k, eta0, eta_max, rho, n_ls, q, q_star, gamma,
+                  delta, step_bound, m_min, theta_new, trial, t, grad):
+    """Direction, line search and step classification (Steps 2-3).
+
+    Writes the new estimate into `theta_new` and the new trial point into
+    `trial`. Returns (kind, eta, phi).
+    """
+    p = theta.size
+    for r in range(p):
+        acc = 0.0
+        for j in range(n):
+            acc -= lam[j] * H[j, r]
+        t[r] = acc
+    tt = 0.0
+    for r in range(p):
+        tt += t[r] * t[r]
+    lb = 0.0
+    for j in range(n):
+        lb += lam[j] * beta[j]
+    phi = -tt - lb                                        # eq. (3.6)
+    theta_new[:] = theta
+    trial[:] = theta
+    if phi >= -delta:                                     # Step 2
+        return STOP, 0.0, phi
+    eta = eta_max
+    if step_bound:                                        # eqs. (4.1)-(4.2)
+        e2 = e0 * e0
+        if e2 == 0.0 or lb > 2.0 * tt:
+            eta = 0.0
+        else:
+            hh = tt / e2                     # ||h_bar||^2, t = e h_bar
+            eta = min(eta, (2.0 * tt - lb) / (tt * (1.0 + hh)))
+    accepted = False
+    f_new = f0
+    tried = eta
+    if eta > 0.0:
+        for _ in range(n_ls + 1):                         # eq. (3.8)
+            for r in range(p):
+                theta_new[r] = theta[r] + eta * t[r]
+            project(theta_new, o, m_min)
+            f_try, _ = _cost(theta_new, o, u, ystar, y, xs, vs, zs, k, grad)
+            tried = eta
+            if f_try <= f0 + q * eta * phi:
+                accepted = True
+                f_new = f_try
+                break
+            eta *= rho
+    if accepted and eta >= eta0 * (1.0 - 1e-12):
+        trial[:] = theta_new                              # long step
+        return LONG, eta, phi
+    if accepted:
+        kind = SHORT
+        eta_star = eta / rho
+    else:
+        kind = NULL
+        theta_new[:] = theta
+        eta = 0.0
+        eta_star = tried
+    # Trial point theta* = theta + eta* t with eta* > eta satisfying (3.10);
+    # if no candidate up to eta_max does, the largest one is used.
+    if eta_star <= 0.0:
+        eta_star = eta_max * rho ** n_ls
+    top = eta_max if eta_max > eta_star else eta_star
+    while True:
+        for r in range(p):
+            trial[r] = theta[r] + eta_star * t[r]
+        project(trial, o, m_min)
+        f_star, e_star = _cost(trial, o, u, ystar, y, xs, vs, zs, k, grad)
+        alpha = f_new - f_star
+        ht = 0.0
+        dist2 = 0.0
+        for r in range(p):
+            h = -e_star * grad[r]
+            alpha -= h * (theta_new[r] - trial[r])
+            ht += h * t[r]
+            dist2 += (theta_new[r] - trial[r]) ** 2
+        b_star = max(abs(alpha), gamma * dist2)
+        if -b_star + ht >= q_star * phi or eta_star >= top:
+            break
+        eta_star = min(eta_star / rho, top)
+    return kind, eta, phi
+
+
+@numba.njit(cache=True)
+def gradient_run(theta, o, u, y, series_parallel, xs, vs, zs, ys, k0, k1,
+                 mu, skip_nonsmooth, m_min, history, errors, kinds, grad):
+    """The traditional gradient method over samples k0..k1-1.
+
+    theta(k+1) = theta(k) + mu e(k) w(k), with the update skipped at
+    nonsmooth samples (a zone switch in the predictor window) when
+    `skip_nonsmooth`. Returns the index of the first non-finite estimate,
+    or -1.
+    """
+    for k in range(k0, k1):
+        ystar = y if series_parallel else ys
+        yhat, nonsmooth = window_predict(theta, o, u, ystar, xs, vs, zs, k,
+                                         grad)
+        e = y[k] - yhat
+        errors[k] = e
+        if nonsmooth and skip_nonsmooth:
+            kinds[k] = SKIP
+        else:
+            kinds[k] = LONG
+            for r in range(theta.size):
+                theta[r] += mu * e * grad[r]
+            project(theta, o, m_min)
+        for r in range(theta.size):
+            if not np.isfinite(theta[r]):
+                return k
+            history[k, r] = theta[r]
+        store_state(theta, o, u, ystar, xs, vs, zs, ys, k, grad)
+    return -1

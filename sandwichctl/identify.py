@@ -1,0 +1,581 @@
+r"""Recursive identification of sandwich systems (Section 3 of the paper).
+
+`identify` estimates the normalised parameter vector of eq. (2.5) from
+input/output data and returns an `IdentificationResult` whose ``model``
+is a `SandwichSystem`. It is built on `RecursiveIdentifier`, a streaming
+estimator whose ``update(u_k, y_k)`` takes one sample at a time.
+
+Methods
+-------
+``'bundle'``
+    The paper's nonsmooth recursive gradient identifier: Clarke
+    subgradients (3.2)-(3.3), a bundle of at most ``k1`` subgradients with
+    locality measures, the direction QP (3.4) solved with piqp, phi of
+    (3.6), the line search (3.7)-(3.10) with long, short and null steps,
+    and the stopping test ``phi >= -delta``.
+``'gradient'``
+    The traditional gradient method the paper compares against:
+    theta(k+1) = theta(k) + mu e(k) w(k) with step ``mu`` (0.009 in
+    Section 5), skipping the nonsmooth samples.
+
+The interpretations of the places where the paper is loose are listed in
+``docs/algorithm.md``; each is an option named after the paper's symbol.
+"""
+
+import time
+import warnings
+
+import numpy as np
+from scipy.optimize import OptimizeResult
+
+from ._predictor import padding, store_state
+from ._qp import simplex_qp, QPError
+from ._recursive import (bundle_prepare, bundle_finish, gradient_run, LONG,
+                         SHORT, NULL, STOP, SKIP)
+from .sandwich import SandwichSystem, theta_labels
+from ._validation import (check_int, check_positive, check_nonnegative,
+                          check_signal, check_vector, check_finite)
+
+__all__ = ['identify', 'RecursiveIdentifier', 'IdentificationResult',
+           'parameter_error']
+
+_KIND_NAMES = {LONG: 'long', SHORT: 'short', NULL: 'null', STOP: 'stop',
+               SKIP: 'skip'}
+
+#: Default options of each recursive method (paper symbols where defined).
+DEFAULTS = {
+    'bundle': dict(eta0=0.015, k1=6, delta=1e-4, q=0.1, q_star=0.5,
+                   gamma=0.5, eta_max=None, rho=0.5, n_ls=10,
+                   step_bound=False, predictor='series-parallel',
+                   m_min=1e-6, divergence_limit=1e6),
+    'gradient': dict(mu=0.009, skip_nonsmooth=True,
+                     predictor='series-parallel', m_min=1e-6,
+                     divergence_limit=1e6),
+}
+
+_CHUNK = 4096
+
+
+def parameter_error(theta_hat, theta_true):
+    """Normalised parameter error ||theta_hat - theta|| / ||theta||.
+
+    Parameters
+    ----------
+    theta_hat : array_like, shape (p,) or (N, p)
+        One estimate or a history of estimates (one per row).
+    theta_true : array_like, shape (p,)
+        The true parameter vector.
+
+    Returns
+    -------
+    float or ndarray of shape (N,)
+
+    Examples
+    --------
+    >>> import sandwichctl as sw
+    >>> float(sw.parameter_error([1.1, 2.0], [1.0, 2.0]))  # doctest: +ELLIPSIS
+    0.0447...
+    """
+    theta_true = np.asarray(theta_true, dtype=float)
+    theta_hat = np.asarray(theta_hat, dtype=float)
+    if theta_hat.shape[-1] != theta_true.size:
+        raise ValueError(
+            f"theta_hat has {theta_hat.shape[-1]} parameters per estimate "
+            f"but theta_true has {theta_true.size}")
+    return (np.linalg.norm(theta_hat - theta_true, axis=-1)
+            / np.linalg.norm(theta_true))
+
+
+def _check_options(method, options):
+    if method not in DEFAULTS:
+        raise ValueError(f"method must be one of {sorted(DEFAULTS)}; got "
+                         f"{method!r}")
+    unknown = set(options) - set(DEFAULTS[method])
+    if unknown:
+        raise TypeError(
+            f"unknown option(s) {sorted(unknown)} for method={method!r}; "
+            f"valid options are {sorted(DEFAULTS[method])}")
+    opt = dict(DEFAULTS[method], **options)
+    if opt['predictor'] not in ('series-parallel', 'parallel'):
+        raise ValueError(f"predictor must be 'series-parallel' or "
+                         f"'parallel'; got {opt['predictor']!r}")
+    opt['m_min'] = check_positive('m_min', opt['m_min'])
+    opt['divergence_limit'] = check_positive('divergence_limit',
+                                             opt['divergence_limit'])
+    if method == 'gradient':
+        opt['mu'] = check_positive('mu', opt['mu'])
+        opt['skip_nonsmooth'] = bool(opt['skip_nonsmooth'])
+        return opt
+    opt['k1'] = check_int('k1', opt['k1'], minimum=1)
+    eta0 = check_positive('eta0', opt['eta0'])
+    if eta0 > 1:
+        raise ValueError(f"eta0 must be in (0, 1] (eq. (3.7)); got {eta0}")
+    opt['eta0'] = eta0
+    opt['delta'] = check_positive('delta', opt['delta'])
+    q = check_finite('q', opt['q'])
+    if not 0 < q < 0.5:
+        raise ValueError(f"q must be in (0, 0.5) (eq. (3.7)); got {q}")
+    q_star = check_finite('q_star', opt['q_star'])
+    if not q < q_star < 1:
+        raise ValueError(
+            f"q_star must be in (q, 1) = ({q}, 1) (eq. (3.7)); got {q_star}")
+    opt['q'], opt['q_star'] = q, q_star
+    opt['gamma'] = check_nonnegative('gamma', opt['gamma'])
+    eta_max = eta0 if opt['eta_max'] is None else check_positive(
+        'eta_max', opt['eta_max'])
+    if not eta0 <= eta_max <= 1:
+        raise ValueError(f"eta_max must be in [eta0, 1] = [{eta0}, 1]; got "
+                         f"{eta_max}")
+    opt['eta_max'] = eta_max
+    rho = check_finite('rho', opt['rho'])
+    if not 0 < rho < 1:
+        raise ValueError(f"rho must be in (0, 1); got {rho}")
+    opt['rho'] = rho
+    opt['n_ls'] = check_int('n_ls', opt['n_ls'], minimum=0)
+    opt['step_bound'] = bool(opt['step_bound'])
+    return opt
+
+
+class RecursiveIdentifier:
+    r"""Streaming estimator of a sandwich system, one sample at a time.
+
+    Parameters
+    ----------
+    na, nb, nc, nd : int
+        Orders of eq. (2.1) (nb and nd count the coefficients after
+        b0 = d0 = 1).
+    q1, q2 : int, optional
+        Known delays of L1 and L2 (default 1).
+    method : {'bundle', 'gradient'}, optional
+        The paper's bundle method (default) or the traditional gradient
+        method; see the module documentation.
+    theta0 : array_like, optional
+        Starting point in the order of eq. (2.5). Default: zeros for the
+        linear coefficients and 0.1 for m1, m2, D1, D2 (as in Section 5).
+    dt : float or True, optional
+        Sampling time of the identified model.
+    keep_history : bool, optional
+        Keep theta(k), e(k) and the step kind of every sample (default
+        True; turn off for unbounded online use).
+    **options
+        Method options. ``'bundle'``: eta0 (0.015), k1 (6), delta (1e-4),
+        q (0.1), q_star (0.5), gamma (0.5), eta_max (None: = eta0), rho
+        (0.5), n_ls (10), step_bound (False), predictor
+        ('series-parallel'), m_min (1e-6), divergence_limit (1e6).
+        ``'gradient'``: mu (0.009), skip_nonsmooth (True), predictor,
+        m_min, divergence_limit. See ``docs/algorithm.md``.
+
+    Examples
+    --------
+    >>> import sandwichctl as sw
+    >>> plant = sw.examples.paper_plant()
+    >>> u = sw.examples.paper_input(500, seed=0)
+    >>> y = plant.simulate(u).outputs
+    >>> est = sw.RecursiveIdentifier(**plant.orders)
+    >>> for uk, yk in zip(u, y):
+    ...     e = est.update(uk, yk)
+    >>> est.theta.shape
+    (9,)
+    """
+
+    def __init__(self, na, nb, nc, nd, q1=1, q2=1, method='bundle',
+                 theta0=None, dt=True, keep_history=True, **options):
+        self.orders = {'na': check_int('na', na), 'nb': check_int('nb', nb),
+                       'nc': check_int('nc', nc), 'nd': check_int('nd', nd),
+                       'q1': check_int('q1', q1), 'q2': check_int('q2', q2)}
+        self._o = tuple(self.orders[k] for k in
+                        ('na', 'nb', 'nc', 'nd', 'q1', 'q2'))
+        self.method = method
+        self.options = _check_options(method, options)
+        self.dt = dt
+        self.labels = theta_labels(na, nb, nc, nd)
+        p = len(self.labels)
+        if theta0 is None:
+            theta0 = np.zeros(p)
+            theta0[nc + na:nc + na + 4] = 0.1
+        theta0 = check_vector('theta0', theta0, p)
+        im = nc + na
+        if np.any(theta0[im:im + 2] <= 0) or np.any(theta0[im + 2:im + 4] < 0):
+            raise ValueError(
+                f"theta0 must have m1, m2 > 0 and D1, D2 >= 0 (entries "
+                f"{im}..{im + 3}); got {theta0[im:im + 4]}")
+        self.theta0 = theta0
+        self._theta = theta0.copy()
+        self.keep_history = keep_history
+        self._pad = padding(self._o)
+        cap = self._pad + _CHUNK
+        self._u, self._y = np.zeros(cap), np.zeros(cap)
+        self._xs, self._vs, self._ys = np.zeros(cap), np.zeros(cap), \
+            np.zeros(cap)
+        self._zs = np.zeros(cap, dtype=np.int64)
+        self._pos = self._pad
+        self._grad = np.zeros(p)
+        self.n_samples = 0
+        self.counts = {name: 0 for name in _KIND_NAMES.values()}
+        self.diverged_at = None
+        self._hist, self._err, self._kind = [], [], []
+        if method == 'bundle':
+            k1 = self.options['k1']
+            self._trials = np.zeros((max(k1 - 1, 1), p))
+            self._s = np.zeros(max(k1 - 1, 1))
+            self._ntrial = 0
+            self._H = np.zeros((k1, p))
+            self._beta = np.zeros(k1)
+            self._work = [np.zeros(p) for _ in range(3)]
+
+    @property
+    def theta(self):
+        """Current estimate (copy), in the order of eq. (2.5)."""
+        return self._theta.copy()
+
+    @property
+    def model(self):
+        """Current estimate as a normalised `SandwichSystem`."""
+        return SandwichSystem.from_theta(self._theta, **self.orders,
+                                         dt=self.dt)
+
+    # ------------------------------------------------------------------
+    def update(self, u_k, y_k):
+        """Process one sample; return the a-priori prediction error e(k).
+
+        Raises
+        ------
+        RuntimeError
+            If the estimate has diverged earlier (see `diverged_at`).
+        """
+        u_k = check_finite('u_k', u_k)
+        y_k = check_finite('y_k', y_k)
+        return float(self.update_many(np.array([u_k]), np.array([y_k]))[0])
+
+    def update_many(self, u, y):
+        """Process a block of samples; return their prediction errors."""
+        u = check_signal('u', u)
+        y = check_signal('y', y, length=u.size)
+        if self.diverged_at is not None:
+            raise RuntimeError(
+                f"the estimate diverged at sample {self.diverged_at}; create "
+                f"a new estimator (smaller eta0/mu, or another theta0)")
+        errors = np.empty(u.size)
+        done = 0
+        while done < u.size:
+            room = self._u.size - self._pos
+            if room == 0:
+                self._shift()
+                room = self._u.size - self._pos
+            m = min(room, u.size - done)
+            sl = slice(self._pos, self._pos + m)
+            self._u[sl] = u[done:done + m]
+            self._y[sl] = y[done:done + m]
+            got = self._run(self._pos, self._pos + m, errors[done:done + m])
+            self._pos += got
+            self.n_samples += got
+            done += got
+            if got < m:
+                errors[done:] = np.nan
+                break
+        return errors
+
+    def _shift(self):
+        pad = self._pad
+        for arr in (self._u, self._y, self._xs, self._vs, self._ys,
+                    self._zs):
+            arr[:pad] = arr[self._pos - pad:self._pos]
+        self._pos = pad
+
+    def _diverged(self, theta, k_abs):
+        return (not np.all(np.isfinite(theta))
+                or np.max(np.abs(theta)) > self.options['divergence_limit'])
+
+    def _record(self, theta, e, kind):
+        self.counts[_KIND_NAMES[kind]] += 1
+        if self.keep_history:
+            self._hist.append(theta.copy())
+            self._err.append(e)
+            self._kind.append(kind)
+
+    def _flag_divergence(self, k_abs):
+        self.diverged_at = k_abs
+        warnings.warn(
+            f"{self.method} estimate diverged at sample {k_abs} (non-finite "
+            f"or |theta| > {self.options['divergence_limit']:g}); stopped "
+            f"and kept the last finite estimate", RuntimeWarning,
+            stacklevel=4)
+
+    def _run(self, k0, k1, errors):
+        """Process buffer positions k0..k1-1; return how many were done."""
+        if self.method == 'gradient':
+            return self._run_gradient(k0, k1, errors)
+        return self._run_bundle(k0, k1, errors)
+
+    def _run_gradient(self, k0, k1, errors):
+        opt = self.options
+        if not hasattr(self, '_gbuf'):
+            cap = self._u.size
+            self._gbuf = (np.zeros((cap, self._theta.size)), np.zeros(cap),
+                          np.zeros(cap, dtype=np.int64))
+        hist, err, kinds = self._gbuf
+        theta = self._theta.copy()
+        bad = gradient_run(
+            theta, self._o, self._u, self._y,
+            opt['predictor'] == 'series-parallel', self._xs, self._vs,
+            self._zs, self._ys, k0, k1, opt['mu'], opt['skip_nonsmooth'],
+            opt['m_min'], hist, err, kinds, self._grad)
+        too_big = np.flatnonzero(
+            np.max(np.abs(hist[k0:k1]), axis=1) > opt['divergence_limit'])
+        stop = k1 if bad < 0 else bad
+        if too_big.size and k0 + too_big[0] < stop:
+            stop = k0 + too_big[0]
+        done = stop - k0
+        for k in range(k0, stop):
+            self._record(hist[k], err[k], kinds[k])
+        errors[:done] = err[k0:stop]
+        if stop < k1:
+            self._theta = hist[stop - 1].copy() if stop > k0 else self._theta
+            self._flag_divergence(self.n_samples + done)
+        else:
+            self._theta = theta
+        return done
+
+    def _run_bundle(self, k0, k1, errors):
+        opt = self.options
+        ystar = self._y if opt['predictor'] == 'series-parallel' else self._ys
+        o, grad = self._o, self._grad
+        t, theta_new, trial = self._work
+        H, beta, trials, s = self._H, self._beta, self._trials, self._s
+        cap = trials.shape[0] if opt['k1'] > 1 else 0
+        for k in range(k0, k1):
+            theta = self._theta
+            f0, e0, n = bundle_prepare(
+                theta, trials, self._ntrial, s, o, self._u, ystar, self._y,
+                self._xs, self._vs, self._zs, k, opt['gamma'], H, beta, grad)
+            if n == 1:
+                lam = np.ones(1)
+            else:
+                Hn = H[:n]
+                try:
+                    lam = simplex_qp(Hn @ Hn.T, beta[:n].copy())
+                except QPError as exc:
+                    warnings.warn(f"bundle QP failed at sample "
+                                  f"{self.n_samples + k - k0} ({exc}); "
+                                  f"using the current subgradient only",
+                                  RuntimeWarning, stacklevel=4)
+                    lam = np.zeros(n)
+                    lam[0] = 1.0
+            kind, eta, phi = bundle_finish(
+                theta, lam, H, beta, n, f0, e0, o, self._u, ystar, self._y,
+                self._xs, self._vs, self._zs, self._ys, k, opt['eta0'],
+                opt['eta_max'], opt['rho'], opt['n_ls'], opt['q'],
+                opt['q_star'], opt['gamma'], opt['delta'], opt['step_bound'],
+                opt['m_min'], theta_new, trial, t, grad)
+            if self._diverged(theta_new, k):
+                self._flag_divergence(self.n_samples + k - k0)
+                return k - k0
+            if kind != STOP and cap:
+                step = np.linalg.norm(theta_new - theta)
+                s[:self._ntrial] += step
+                if self._ntrial == cap:
+                    trials[:-1] = trials[1:]
+                    s[:-1] = s[1:]
+                    self._ntrial -= 1
+                trials[self._ntrial] = trial
+                s[self._ntrial] = np.linalg.norm(theta_new - trial)
+                self._ntrial += 1
+            self._theta = theta_new.copy()
+            store_state(self._theta, o, self._u, ystar, self._xs, self._vs,
+                        self._zs, self._ys, k, grad)
+            errors[k - k0] = e0
+            self._record(self._theta, e0, kind)
+        return k1 - k0
+
+    # ------------------------------------------------------------------
+    def result(self, elapsed=None):
+        """The `IdentificationResult` for the samples processed so far."""
+        p = self._theta.size
+        hist = (np.array(self._hist) if self._hist else np.zeros((0, p)))
+        success = self.diverged_at is None
+        if success:
+            message = f"processed {self.n_samples} samples"
+        else:
+            message = (f"diverged at sample "
+                       f"{self.diverged_at}; the model is the last finite "
+                       f"estimate")
+        return IdentificationResult(
+            model=self.model, theta=self.theta, history=hist,
+            errors=np.array(self._err), kinds=np.array(self._kind, int),
+            counts=dict(self.counts), success=success, message=message,
+            method=self.method, options=dict(self.options),
+            orders=dict(self.orders), theta_labels=list(self.labels),
+            theta0=self.theta0.copy(), nit=self.n_samples, elapsed=elapsed)
+
+
+class IdentificationResult(OptimizeResult):
+    """Result of `identify` (a `scipy.optimize.OptimizeResult`).
+
+    Attributes
+    ----------
+    model : SandwichSystem
+        The identified, normalised model (b0 = d0 = 1).
+    theta : ndarray
+        Final estimate, order of eq. (2.5); names in `theta_labels`.
+    history : ndarray, shape (N, p)
+        theta(k) after every sample (empty for batch methods).
+    errors : ndarray, shape (N,)
+        A-priori prediction errors e(k) (recursive methods) or final
+        residuals (batch methods).
+    counts : dict
+        Numbers of long, short, null and stop steps (and skipped samples
+        of the gradient method).
+    success : bool
+        False if the estimate diverged or the method failed.
+    message : str
+        What happened.
+    method, options, orders, theta0, nit, elapsed
+        The method, its options, the orders, the start, the number of
+        samples or iterations, and the wall time in seconds.
+    """
+
+    def __repr__(self):
+        lines = [f"IdentificationResult ({self.method}): "
+                 f"{'success' if self.success else 'FAILED'}",
+                 f"  {self.message}"]
+        if getattr(self, 'counts', None):
+            lines.append('  steps: ' + ', '.join(
+                f"{k} {v}" for k, v in self.counts.items() if v))
+        lines.append('  theta: ' + ', '.join(
+            f"{name}={val:.4g}" for name, val in
+            zip(self.theta_labels, self.theta)))
+        return '\n'.join(lines)
+
+    __str__ = __repr__
+
+    def parameter_error(self, true_theta):
+        """Normalised error ||theta(k) - theta|| / ||theta|| for every k."""
+        return parameter_error(self.history, true_theta)
+
+    def plot_convergence(self, true_theta=None, axes=None, label=None,
+                         **line_kw):
+        """Plot every parameter's trajectory theta(k).
+
+        Parameters
+        ----------
+        true_theta : array_like, optional
+            True (equivalent) parameters, drawn as dashed lines.
+        axes : array of matplotlib Axes, optional
+            One axes per parameter, e.g. from an earlier call, to overlay
+            several methods.
+        label : str, optional
+            Legend label of these trajectories (default: the method).
+        **line_kw
+            Passed to ``Axes.plot`` (e.g. color, ls).
+
+        Returns
+        -------
+        ndarray of matplotlib Axes
+        """
+        import matplotlib.pyplot as plt
+        p = len(self.theta_labels)
+        if axes is None:
+            ncol = 3
+            nrow = -(-p // ncol)
+            fig, axes = plt.subplots(nrow, ncol, figsize=(11, 2.2 * nrow),
+                                     sharex=True, squeeze=False)
+            for ax in axes.flat[p:]:
+                ax.set_visible(False)
+        axes = np.asarray(axes)
+        k = np.arange(1, self.history.shape[0] + 1)
+        for i, ax in enumerate(axes.flat[:p]):
+            ax.plot(k, self.history[:, i], label=label or self.method,
+                    **line_kw)
+            if true_theta is not None:
+                ax.axhline(np.asarray(true_theta)[i], color='k', ls='--',
+                           lw=0.8)
+            ax.set_title(self.theta_labels[i], fontsize=9)
+        axes.flat[0].legend(fontsize=8)
+        for ax in axes[-1] if axes.ndim == 2 else axes[-1:]:
+            ax.set_xlabel('k')
+        return axes
+
+
+def identify(u, y, na, nb, nc, nd, q1=1, q2=1, method='bundle', theta0=None,
+             dt=True, progress=False, **options):
+    r"""Identify a sandwich system from input/output data.
+
+    Parameters
+    ----------
+    u, y : array_like, shape (N,)
+        Measured input and output.
+    na, nb, nc, nd : int
+        Orders of eq. (2.1); nb and nd count coefficients after
+        b0 = d0 = 1.
+    q1, q2 : int, optional
+        Known delays (default 1).
+    method : {'bundle', 'gradient'}, optional
+        Estimator; see the module documentation.
+    theta0 : array_like, optional
+        Starting point (order of eq. (2.5)).
+    dt : float or True, optional
+        Sampling time of the returned model.
+    progress : bool, optional
+        Print progress to stderr on long runs.
+    **options
+        Options of the method (see `RecursiveIdentifier`).
+
+    Returns
+    -------
+    IdentificationResult
+        With ``model`` (a normalised `SandwichSystem`), ``theta``,
+        ``history``, ``errors``, step ``counts``, ``success`` and
+        ``message``.
+
+    Examples
+    --------
+    >>> import sandwichctl as sw
+    >>> plant = sw.examples.paper_plant()
+    >>> u = sw.examples.paper_input(2000, seed=1)
+    >>> y = plant.simulate(u).outputs
+    >>> res = sw.identify(u, y, **plant.orders)
+    >>> res.success, res.model.orders == plant.orders
+    (True, True)
+    """
+    u = check_signal('u', u)
+    y = check_signal('y', y)
+    if u.size != y.size:
+        raise ValueError(f"u and y must have the same length; got "
+                         f"{u.size} and {y.size} samples")
+    est = RecursiveIdentifier(na, nb, nc, nd, q1, q2, method=method,
+                              theta0=theta0, dt=dt, **options)
+    p = len(est.labels)
+    needed = 10 * p + padding(est._o)
+    if u.size < needed:
+        raise ValueError(
+            f"u and y have {u.size} samples, too few for {p} parameters "
+            f"with these orders and delays; give at least {needed}")
+    start = time.perf_counter()
+    step = max(u.size // 20, 1)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter('always')
+        for lo in range(0, u.size, step):
+            est.update_many(u[lo:lo + step], y[lo:lo + step])
+            if progress:
+                _progress(method, est.n_samples, u.size, start)
+            if est.diverged_at is not None:
+                break
+    for w in caught:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return est.result(elapsed=time.perf_counter() - start)
+
+
+def _progress(method, done, total, start):
+    import sys
+    elapsed = time.perf_counter() - start
+    left = elapsed / done * (total - done) if done else 0.0
+    text = (f"{method:>9}: {done}/{total} samples, {elapsed:5.1f}s elapsed, "
+            f"~{left:4.1f}s left")
+    if sys.stderr.isatty():
+        bar = '#' * int(30 * done / total)
+        sys.stderr.write(f"\r{method:>9}: [{bar:<30}] " + text[11:])
+        if done >= total:
+            sys.stderr.write('\n')
+    elif done >= total or (20 * done // total) % 5 == 0:
+        sys.stderr.write(text + '\n')       # a line every 25% in logs
+    sys.stderr.flush()

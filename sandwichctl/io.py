@@ -1,0 +1,300 @@
+"""Saving and loading sandwich models as plain JSON.
+
+`save_model` writes a `SandwichSystem` to a small, human-readable JSON
+file and `load_model` reads it back. The round trip is exact: floats are
+written with Python's shortest round-tripping ``repr``, so the loaded
+model has bitwise the same coefficients, the same `SandwichSystem.theta`
+and the same simulated output as the saved one.
+
+File format (version 1)
+-----------------------
+One JSON object with these keys (the coefficients are those of
+eqs. (2.1)-(2.2), as `SandwichSystem.coefficients` returns them)::
+
+    {
+      "format": "sandwichctl.SandwichSystem",
+      "version": 1,
+      "name": "paper",
+      "dt": 1,
+      "inputs": "u",
+      "outputs": "y",
+      "a": [0.1, 0.2],
+      "b": [1.5],
+      "q1": 1,
+      "c": [1.2, 0.32],
+      "d": [2.0, -0.1],
+      "q2": 1,
+      "m1": 1.0,
+      "m2": 1.2,
+      "D1": 0.5,
+      "D2": 0.6,
+      "metadata": {}
+    }
+
+``format``
+    Always ``"sandwichctl.SandwichSystem"``.
+``version``
+    Format version, an integer; this is version 1.
+``name``
+    System name, or null for python-control's generic ``sys[i]`` names
+    (the loaded model then gets a fresh generic name).
+``dt``
+    Sampling time: a positive number, or ``true`` for a discrete system
+    with unspecified sampling time.
+``inputs``, ``outputs``
+    Names of the input and output signals (optional on reading; default
+    ``"u"`` and ``"y"``).
+``a``, ``b``, ``q1``
+    L1 of eq. (2.1): ``a`` = [a1, ..., a_na] (may be empty), ``b`` =
+    [b0, ..., b_nb] with b0 != 0, and the delay ``q1`` in samples.
+``c``, ``d``, ``q2``
+    L2 of eq. (2.1), likewise.
+``m1``, ``m2``, ``D1``, ``D2``
+    Backlash slopes and thresholds of eq. (2.2).
+``metadata``
+    Free-form JSON object (where the data came from, the identifier
+    settings, the date, ...); sandwichctl does not interpret it.
+
+Readers reject other ``format`` values, versions they do not know and
+files with missing keys; unknown extra keys are ignored.
+"""
+
+import json
+import numbers
+import os
+import re
+
+import numpy as np
+
+__all__ = ['save_model', 'load_model', 'FORMAT_VERSION']
+
+#: Version of the JSON model format written by `save_model`.
+FORMAT_VERSION = 1
+
+_FORMAT_TAG = 'sandwichctl.SandwichSystem'
+_REQUIRED = ('version', 'name', 'dt', 'a', 'b', 'q1', 'c', 'd', 'q2',
+             'm1', 'm2', 'D1', 'D2')
+
+
+def save_model(model, path, metadata=None):
+    """Save a `SandwichSystem` to a JSON file (format in `sandwichctl.io`).
+
+    Parameters
+    ----------
+    model : SandwichSystem
+        The model to save. Its current backlash parameters (``params``)
+        are saved.
+    path : str, os.PathLike or file object
+        Where to write; an open text file is written to and left open.
+    metadata : dict, optional
+        Free-form information stored with the model. It must be
+        JSON-serialisable; numpy scalars and arrays are stored as numbers
+        and lists.
+
+    Raises
+    ------
+    TypeError
+        If `model` is not a `SandwichSystem` or `metadata` is not a dict
+        of JSON-serialisable values.
+    ValueError
+        If `metadata` contains NaN or infinity (not valid JSON).
+
+    See Also
+    --------
+    load_model : the inverse.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import sandwichctl as sw
+    >>> plant = sw.examples.paper_plant()
+    >>> path = os.path.join(tempfile.mkdtemp(), 'plant.json')
+    >>> sw.save_model(plant, path, metadata={'source': 'Section 5'})
+    >>> loaded = sw.load_model(path)
+    >>> bool((loaded.theta == plant.theta).all())
+    True
+    """
+    try:
+        text = _dumps(_to_dict(model, metadata))
+    except ValueError as exc:
+        raise ValueError(f"metadata must not contain NaN or infinity, which "
+                         f"JSON cannot represent ({exc}); store them as "
+                         f"strings or None") from None
+    if hasattr(path, 'write'):
+        path.write(text + '\n')
+    else:
+        with open(os.fspath(path), 'w', encoding='utf-8') as f:
+            f.write(text + '\n')
+
+
+def load_model(path, return_metadata=False):
+    """Load a `SandwichSystem` saved by `save_model`.
+
+    Parameters
+    ----------
+    path : str, os.PathLike or file object
+        File to read; an open text file is read from.
+    return_metadata : bool, optional
+        Also return the stored metadata dict.
+
+    Returns
+    -------
+    model : SandwichSystem
+        The model, with bitwise the same coefficients as the saved one.
+    metadata : dict
+        Only if `return_metadata` is True.
+
+    Raises
+    ------
+    ValueError
+        If the file is not JSON, is not a sandwichctl model, has a format
+        version this sandwichctl cannot read, misses keys, or holds
+        invalid coefficients.
+
+    See Also
+    --------
+    save_model : the inverse; the format is described in `sandwichctl.io`.
+
+    Examples
+    --------
+    >>> import io
+    >>> import sandwichctl as sw
+    >>> buffer = io.StringIO()
+    >>> sw.save_model(sw.examples.paper_plant(), buffer)
+    >>> model, meta = sw.load_model(io.StringIO(buffer.getvalue()),
+    ...                             return_metadata=True)
+    >>> model.orders, meta
+    ({'na': 2, 'nb': 0, 'nc': 2, 'nd': 1, 'q1': 1, 'q2': 1}, {})
+    """
+    where = _describe(path)
+    try:
+        if hasattr(path, 'read'):
+            data = json.load(path)
+        else:
+            with open(os.fspath(path), encoding='utf-8') as f:
+                data = json.load(f)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{where} is not valid JSON ({exc}); expected a "
+                         f"model written by sandwichctl.save_model") from None
+    model, metadata = _from_dict(data, where)
+    return (model, metadata) if return_metadata else model
+
+
+def _to_dict(model, metadata):
+    from .sandwich import SandwichSystem
+
+    if not isinstance(model, SandwichSystem):
+        raise TypeError(f"model must be a sandwichctl.SandwichSystem; got "
+                        f"{type(model).__name__}")
+    if metadata is None:
+        metadata = {}
+    if not isinstance(metadata, dict):
+        raise TypeError(f"metadata must be a dict; got "
+                        f"{type(metadata).__name__}")
+    co = model.coefficients
+    name = model.name
+    if name is None or re.match(r'^sys\[\d*\]$', name):
+        name = None
+    return {
+        'format': _FORMAT_TAG,
+        'version': FORMAT_VERSION,
+        'name': name,
+        'dt': _dt_to_json(model.dt),
+        'inputs': model.input_labels[0],
+        'outputs': model.output_labels[0],
+        'a': [float(v) for v in co['a']],
+        'b': [float(v) for v in co['b']],
+        'q1': int(co['q1']),
+        'c': [float(v) for v in co['c']],
+        'd': [float(v) for v in co['d']],
+        'q2': int(co['q2']),
+        'm1': float(co['m1']),
+        'm2': float(co['m2']),
+        'D1': float(co['D1']),
+        'D2': float(co['D2']),
+        'metadata': metadata,
+    }
+
+
+def _from_dict(data, where):
+    from .backlash import Backlash
+    from .sandwich import SandwichSystem
+
+    if not isinstance(data, dict) or data.get('format') != _FORMAT_TAG:
+        found = (data.get('format') if isinstance(data, dict)
+                 else type(data).__name__)
+        raise ValueError(
+            f"{where} is not a sandwichctl model file: expected \"format\": "
+            f"\"{_FORMAT_TAG}\", got {found!r}")
+    version = data.get('version', FORMAT_VERSION)   # missing: see below
+    if version != FORMAT_VERSION:
+        raise ValueError(
+            f"{where} has model format version {version!r}, but this "
+            f"sandwichctl reads version {FORMAT_VERSION}; "
+            + ("upgrade sandwichctl to read it" if isinstance(
+                version, int) and version > FORMAT_VERSION
+               else "the file is damaged or not from sandwichctl"))
+    missing = [key for key in _REQUIRED if key not in data]
+    if missing:
+        raise ValueError(f"{where} is missing the key(s) {missing}; a "
+                         f"version-1 model file needs {list(_REQUIRED)}")
+    metadata = data.get('metadata', {})
+    if not isinstance(metadata, dict):
+        raise ValueError(f"{where}: metadata must be a JSON object; got "
+                         f"{type(metadata).__name__}")
+    for key in ('a', 'b', 'c', 'd'):
+        if not isinstance(data[key], list):
+            raise ValueError(f"{where}: {key!r} must be a list of numbers; "
+                             f"got {data[key]!r}")
+    dt = data['dt']
+    if not (dt is True or (isinstance(dt, numbers.Real)
+                           and not isinstance(dt, bool))):
+        raise ValueError(f"{where}: 'dt' must be a positive number or true;"
+                         f" got {dt!r}")
+    try:
+        base = SandwichSystem.from_coefficients(
+            a=data['a'], b=data['b'], c=data['c'], d=data['d'],
+            m1=data['m1'], m2=data['m2'], D1=data['D1'], D2=data['D2'],
+            q1=data['q1'], q2=data['q2'], dt=dt)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where} holds an invalid model: {exc}") from None
+    model = SandwichSystem(
+        base.L1, Backlash(data['m1'], data['m2'], data['D1'], data['D2'],
+                          dt=dt), base.L2, name=data['name'],
+        inputs=data.get('inputs', 'u'), outputs=data.get('outputs', 'y'))
+    return model, metadata
+
+
+def _dumps(data):
+    """JSON text with one top-level key per line and the lists inline."""
+    lines = []
+    for key, value in data.items():
+        text = json.dumps(value, indent=2 if key == 'metadata' else None,
+                          allow_nan=False, default=_json_default)
+        text = text.replace('\n', '\n  ')      # nest metadata's lines
+        lines.append(f"  {json.dumps(key)}: {text}")
+    return '{\n' + ',\n'.join(lines) + '\n}'
+
+
+def _dt_to_json(dt):
+    if dt is True:
+        return True
+    if isinstance(dt, numbers.Integral):
+        return int(dt)
+    return float(dt)
+
+
+def _json_default(obj):
+    """Let json write numpy scalars and arrays in metadata."""
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    raise TypeError(f"metadata values must be JSON-serialisable (numbers, "
+                    f"strings, lists, dicts); got {type(obj).__name__}")
+
+
+def _describe(path):
+    if hasattr(path, 'read'):
+        return f"the file object {getattr(path, 'name', type(path).__name__)!r}"
+    return f"{os.fspath(path)!r}"

@@ -1,0 +1,460 @@
+r"""Model validation: fit measures and measured-versus-simulated plots.
+
+All measures compare a measured output y(0), ..., y(N-1) with a simulated
+(or predicted) output :math:`\hat y(0), \dots, \hat y(N-1)`; single-output
+signals only. With :math:`\|\cdot\|` the Euclidean norm over the samples
+and :math:`\bar y` the mean of y,
+
+.. math::
+
+    \mathrm{NRMSE} = \frac{\|y - \hat y\|}{\|y - \bar y\|}, \qquad
+    \mathrm{fit} = 100\,(1 - \mathrm{NRMSE})\ \%, \qquad
+    e_{\max} = \frac{\max_k |y(k) - \hat y(k)|}{\max_k |y(k)|}.
+
+``fit`` is the "fit" of MATLAB's ``compare``: 100 % is a perfect match,
+0 % is no better than the constant :math:`\bar y`, and it can be negative.
+:math:`e_{\max}` is the *maximum relative modelling error* that Section 6
+of the paper reports ("less than 11 %"): the largest absolute error,
+relative to the peak magnitude of the measured output (a fraction, not a
+percentage); `max_relative_error` can also scale by the output range.
+
+`compare` simulates one or several models on the same input, plots them
+over the measurement and returns these numbers.
+"""
+
+import numbers
+
+import numpy as np
+import control as ct
+
+from ._validation import check_signal
+
+__all__ = ['fit_percent', 'nrmse', 'max_relative_error', 'compare',
+           'CompareResult', 'CompareResultList']
+
+
+def nrmse(y, yhat):
+    r"""Normalised root-mean-square error :math:`\|y-\hat y\|/\|y-\bar y\|`.
+
+    The error norm is divided by the norm of the measured output's
+    deviation from its mean, so 0 is a perfect match and 1 is as good as
+    predicting the constant mean.
+
+    Parameters
+    ----------
+    y : array_like, shape (N,)
+        Measured output.
+    yhat : array_like, shape (N,)
+        Simulated or predicted output.
+
+    Returns
+    -------
+    float
+        The NRMSE, >= 0.
+
+    Raises
+    ------
+    ValueError
+        If the signals have different lengths or non-finite samples, or if
+        y is constant (the normalisation is then zero).
+
+    See Also
+    --------
+    fit_percent : the same measure as MATLAB's percentage fit.
+
+    Examples
+    --------
+    >>> import sandwichctl as sw
+    >>> sw.nrmse([1.0, 2.0, 3.0], [1.0, 2.0, 4.0])
+    0.7071
+    """
+    y, yhat = _check_pair(y, yhat)
+    spread = np.linalg.norm(y - y.mean())
+    if spread == 0:
+        raise ValueError(
+            f"y is constant (every sample is {y[0]!r}), so its deviation "
+            f"from the mean is zero and the normalised error is undefined; "
+            f"compare on data that excites the output")
+    return float(np.linalg.norm(y - yhat) / spread)
+
+
+def fit_percent(y, yhat):
+    r"""Percentage fit :math:`100\,(1 - \|y-\hat y\|/\|y-\bar y\|)`.
+
+    This is the "fit" of MATLAB's ``compare`` (System Identification
+    Toolbox): 100 for a perfect match, 0 for a model no better than the
+    mean of y, negative for a worse one.
+
+    Parameters
+    ----------
+    y : array_like, shape (N,)
+        Measured output.
+    yhat : array_like, shape (N,)
+        Simulated or predicted output.
+
+    Returns
+    -------
+    float
+        The fit in percent, <= 100.
+
+    Raises
+    ------
+    ValueError
+        If the signals have different lengths or non-finite samples, or if
+        y is constant.
+
+    See Also
+    --------
+    nrmse : the normalised error, ``fit = 100 * (1 - nrmse)``.
+
+    Examples
+    --------
+    >>> import sandwichctl as sw
+    >>> sw.fit_percent([0.0, 1.0, 0.0, -1.0], [0.0, 0.5, 0.0, -0.5])
+    50.0
+    """
+    return 100.0 * (1.0 - nrmse(y, yhat))
+
+
+def max_relative_error(y, yhat, scale='peak'):
+    r"""Maximum relative modelling error (the measure of Section 6).
+
+    With ``scale='peak'`` (default)
+
+    .. math:: e_{\max} = \frac{\max_k |y(k) - \hat y(k)|}{\max_k |y(k)|},
+
+    the largest absolute error relative to the peak magnitude of the
+    measured output. With ``scale='range'`` the denominator is the output
+    range :math:`\max_k y(k) - \min_k y(k)` instead, which does not depend
+    on an offset in y. The result is a fraction: the paper's "less than
+    11 %" is ``max_relative_error(y, yhat) < 0.11``.
+
+    Parameters
+    ----------
+    y : array_like, shape (N,)
+        Measured output.
+    yhat : array_like, shape (N,)
+        Simulated or predicted output.
+    scale : {'peak', 'range'}, optional
+        What the largest error is divided by (see above).
+
+    Returns
+    -------
+    float
+        The maximum relative error, >= 0.
+
+    Raises
+    ------
+    ValueError
+        If the signals have different lengths or non-finite samples, if
+        `scale` is not 'peak' or 'range', or if the denominator is zero
+        (y identically zero, or constant for ``scale='range'``).
+
+    Examples
+    --------
+    >>> import sandwichctl as sw
+    >>> sw.max_relative_error([1.0, -2.0, 4.0], [1.5, -2.0, 3.0])
+    0.25
+    >>> sw.max_relative_error([1.0, -2.0, 4.0], [1.5, -2.0, 3.0],
+    ...                       scale='range')
+    0.1667
+    """
+    y, yhat = _check_pair(y, yhat)
+    if scale == 'peak':
+        denominator = np.max(np.abs(y))
+        what = 'the peak magnitude max|y|'
+    elif scale == 'range':
+        denominator = np.max(y) - np.min(y)
+        what = 'the range max(y) - min(y)'
+    else:
+        raise ValueError(f"scale must be 'peak' or 'range'; got {scale!r}")
+    if denominator == 0:
+        raise ValueError(
+            f"{what} of y is zero, so the relative error is undefined; "
+            f"compare on data that excites the output")
+    return float(np.max(np.abs(y - yhat)) / denominator)
+
+
+class CompareResult:
+    """Outcome of `compare` for one model.
+
+    Attributes
+    ----------
+    name : str
+        Label of the model (its system name unless `compare` was given
+        labels).
+    fit : float
+        Percentage fit, see `fit_percent`.
+    nrmse : float
+        Normalised error, see `nrmse`.
+    max_relative_error : float
+        Maximum relative error (fraction of max|y|), see
+        `max_relative_error`.
+    yhat : ndarray, shape (N,)
+        Simulated output.
+    y : ndarray, shape (N,)
+        Measured output.
+    timepts : ndarray, shape (N,)
+        Time points of the samples.
+    model : object
+        The model that was simulated.
+    ax : matplotlib.axes.Axes or None
+        The axes plotted on, or None if `compare` did not plot.
+    """
+
+    def __init__(self, name, y, yhat, timepts, model, ax=None):
+        self.name = name
+        self.y = y
+        self.yhat = yhat
+        self.timepts = timepts
+        self.model = model
+        self.ax = ax
+        self.fit = fit_percent(y, yhat)
+        self.nrmse = nrmse(y, yhat)
+        self.max_relative_error = max_relative_error(y, yhat)
+
+    @property
+    def error(self):
+        """Output error ``y - yhat``, shape (N,)."""
+        return self.y - self.yhat
+
+    def as_dict(self):
+        """The numbers as a plain dict (fit, nrmse, max_relative_error).
+
+        Returns
+        -------
+        dict
+            Keys 'name', 'fit', 'nrmse' and 'max_relative_error'.
+        """
+        return {'name': self.name, 'fit': self.fit, 'nrmse': self.nrmse,
+                'max_relative_error': self.max_relative_error}
+
+    def plot(self, ax=None):
+        """Plot the measured and simulated outputs.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; default the current axes.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        return _plot_compare([self], ax)
+
+    def __repr__(self):
+        return (f"CompareResult(name={self.name!r}, fit={self.fit:.4g}, "
+                f"nrmse={self.nrmse:.4g}, "
+                f"max_relative_error={self.max_relative_error:.4g})")
+
+
+class CompareResultList(list):
+    """A list of `CompareResult`, one per model, from `compare`.
+
+    It prints as a table and can plot all models over the measurement.
+    """
+
+    @property
+    def fit(self):
+        """Percentage fits of the models, ndarray of shape (n_models,)."""
+        return np.array([r.fit for r in self])
+
+    @property
+    def nrmse(self):
+        """Normalised errors of the models, ndarray."""
+        return np.array([r.nrmse for r in self])
+
+    @property
+    def max_relative_error(self):
+        """Maximum relative errors of the models, ndarray."""
+        return np.array([r.max_relative_error for r in self])
+
+    def plot(self, ax=None):
+        """Plot the measurement and every model's output on one axes.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; default the current axes.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        return _plot_compare(list(self), ax)
+
+    def __str__(self):
+        width = max([5] + [len(r.name) for r in self])
+        lines = [f"{'model':<{width}}  {'fit %':>8}  {'nrmse':>8}  "
+                 f"{'max rel err':>11}"]
+        for r in self:
+            lines.append(f"{r.name:<{width}}  {r.fit:8.2f}  {r.nrmse:8.4f}"
+                         f"  {r.max_relative_error:11.4f}")
+        return '\n'.join(lines)
+
+
+def compare(model, u, y, ax=None, initial_state=None, timepts=None,
+            labels=None, plot=True):
+    """Simulate model(s) on measured input and compare with measured output.
+
+    Like MATLAB's ``compare``: each model is simulated (not predicted one
+    step ahead) from `initial_state` with input `u`, its output is plotted
+    over the measured `y` with the percentage fit in the legend, and the
+    numbers are returned.
+
+    Parameters
+    ----------
+    model : SandwichSystem, control system, or list of them
+        Model(s) to simulate. A `SandwichSystem` runs its fast
+        `SandwichSystem.simulate`; other python-control systems (e.g. a
+        linear ``ct.tf`` model for reference) run through
+        ``ct.input_output_response`` (or ``ct.forced_response`` for
+        transfer functions). Every model must be single-input,
+        single-output.
+    u : array_like, shape (N,)
+        Measured input.
+    y : array_like, shape (N,)
+        Measured output.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; default the current axes.
+    initial_state : array_like, optional
+        Initial state of the model(s), default zero. With several models it
+        is passed to each, so it is only useful when they share a state
+        layout.
+    timepts : array_like, shape (N,), optional
+        Time points of the samples; default ``dt * arange(N)`` (or
+        ``arange(N)`` when dt is True). Needed for continuous-time models.
+    labels : str or list of str, optional
+        Legend labels, one per model; default the system names.
+    plot : bool, optional
+        If False, only compute the numbers (no matplotlib calls).
+
+    Returns
+    -------
+    CompareResult or CompareResultList
+        A `CompareResult` (fit, nrmse, max_relative_error, yhat, ...) for a
+        single model; a `CompareResultList` if `model` is a list or tuple.
+
+    Raises
+    ------
+    ValueError
+        If u and y differ in length or contain NaN/inf, if y is constant,
+        or if a model is not SISO.
+    TypeError
+        If a model is not a python-control system.
+
+    See Also
+    --------
+    fit_percent, nrmse, max_relative_error : the measures.
+
+    Examples
+    --------
+    >>> import sandwichctl as sw
+    >>> plant = sw.examples.paper_plant()
+    >>> u = sw.examples.paper_input(500, seed=1)
+    >>> y = plant.simulate(u).outputs
+    >>> result = sw.compare(plant, u, y, plot=False)
+    >>> result.fit, result.max_relative_error
+    (100.0, 0.0)
+    """
+    many = isinstance(model, (list, tuple))
+    models = list(model) if many else [model]
+    if not models:
+        raise ValueError("model must be a system or a non-empty list of "
+                         "systems; got an empty list")
+    u = check_signal('u', u)
+    y = check_signal('y', y)
+    if u.size != y.size:
+        raise ValueError(f"u and y must have the same number of samples; "
+                         f"got {u.size} and {y.size}")
+    if labels is None:
+        labels = [getattr(m, 'name', None) or f"model {i}"
+                  for i, m in enumerate(models)]
+    elif isinstance(labels, str):
+        labels = [labels]
+    if len(labels) != len(models):
+        raise ValueError(f"labels must have one entry per model "
+                         f"({len(models)}); got {len(labels)}")
+    if timepts is not None:
+        timepts = check_signal('timepts', timepts, length=u.size)
+
+    results = CompareResultList()
+    for label, m in zip(labels, models):
+        yhat, t = _simulate(m, u, initial_state, timepts)
+        results.append(CompareResult(str(label), y, yhat, t, m))
+    if plot:
+        ax = _plot_compare(results, ax)
+        for r in results:
+            r.ax = ax
+    return results if many else results[0]
+
+
+def _check_pair(y, yhat):
+    y = check_signal('y', y)
+    yhat = check_signal('yhat', yhat)
+    if y.size != yhat.size:
+        raise ValueError(f"y and yhat must have the same number of "
+                         f"samples; got {y.size} and {yhat.size}")
+    return y, yhat
+
+
+def _default_timepts(sys, n):
+    dt = getattr(sys, 'dt', None)
+    if dt is True:
+        return np.arange(n, dtype=float)
+    if isinstance(dt, numbers.Real) and dt > 0:
+        return float(dt) * np.arange(n)
+    raise ValueError(
+        f"timepts is required for a continuous-time model "
+        f"({getattr(sys, 'name', sys)!r} has dt={dt!r}); pass the sample "
+        f"times of u and y")
+
+
+def _simulate(sys, u, initial_state, timepts):
+    """Simulated output of one model and its time points."""
+    from .sandwich import SandwichSystem
+
+    if not isinstance(sys, ct.InputOutputSystem):
+        raise TypeError(
+            f"model must be a SandwichSystem or a python-control system "
+            f"(e.g. ct.tf(...)); got {type(sys).__name__}")
+    if sys.ninputs != 1 or sys.noutputs != 1:
+        raise ValueError(
+            f"model {sys.name!r} must be single-input single-output; got "
+            f"{sys.ninputs} inputs and {sys.noutputs} outputs")
+    t = _default_timepts(sys, u.size) if timepts is None else timepts
+    x0 = 0.0 if initial_state is None else initial_state
+    # An unstable model overflows; that is reported below, not warned.
+    with np.errstate(over='ignore', invalid='ignore'):
+        if isinstance(sys, SandwichSystem):
+            resp = sys.simulate(u, initial_state=initial_state, timepts=t)
+        elif isinstance(sys, ct.NonlinearIOSystem):
+            resp = ct.input_output_response(sys, t, u, initial_state=x0)
+        else:
+            resp = ct.forced_response(sys, t, u, initial_state=x0)
+    yhat = np.asarray(resp.outputs, dtype=float).reshape(-1)
+    if not np.all(np.isfinite(yhat)):
+        raise ValueError(
+            f"the simulated output of model {sys.name!r} is not finite "
+            f"(first bad sample {int(np.flatnonzero(~np.isfinite(yhat))[0])}"
+            f"); the model is probably unstable")
+    return yhat, t
+
+
+def _plot_compare(results, ax):
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        ax = plt.gca()
+    first = results[0]
+    ax.plot(first.timepts, first.y, color='k', lw=1.2, label='measured')
+    for r in results:
+        ax.plot(r.timepts, r.yhat, lw=1.0,
+                label=f"{r.name}: fit {r.fit:.1f} %")
+    dt = getattr(first.model, 'dt', None)
+    ax.set_xlabel('k' if dt is True else 'time')
+    ax.set_ylabel('y')
+    ax.set_title('Measured and simulated output')
+    ax.legend()
+    return ax

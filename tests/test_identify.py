@@ -1,0 +1,254 @@
+"""Tests of the recursive identifiers of Section 3."""
+
+import warnings
+
+import numpy as np
+import pytest
+from scipy.optimize import minimize
+
+import sandwichctl as sw
+from sandwichctl import _predictor as pr
+from sandwichctl import _recursive as rc
+from sandwichctl._qp import simplex_qp
+
+ORDERS = (2, 1, 2, 1, 1, 1)     # na, nb, nc, nd, q1, q2
+
+
+def _state(rng, o, n=60):
+    """Padded signals with a stored past from a random model run."""
+    pad = pr.padding(o)
+    u = np.zeros(pad + n)
+    u[pad:] = rng.normal(0, 1, n)
+    y = np.zeros(pad + n)
+    y[pad:] = rng.normal(0, 1, n)
+    xs, vs, ys = np.zeros(pad + n), np.zeros(pad + n), np.zeros(pad + n)
+    zs = np.zeros(pad + n, dtype=np.int64)
+    return pad, u, y, xs, vs, zs, ys
+
+
+def _theta(rng, o):
+    na, nb, nc, nd = o[:4]
+    return np.concatenate([rng.uniform(-0.3, 0.3, nc + na),
+                           rng.uniform(0.8, 2.0, 2), rng.uniform(0.1, 0.5, 2),
+                           rng.uniform(-0.3, 0.3, nb + nd)])
+
+
+def test_window_gradient_matches_finite_differences(rng):
+    """Eqs. (3.2)-(3.3) against central differences, away from switches."""
+    o = ORDERS
+    pad, u, y, xs, vs, zs, ys = _state(rng, o)
+    theta = _theta(rng, o)
+    grad, g2 = np.zeros(theta.size), np.zeros(theta.size)
+    zones_seen = set()
+    checked = 0
+    for k in range(pad, u.size):
+        pr.store_state(theta, o, u, y, xs, vs, zs, ys, k, g2)
+        if k < pad + 5:
+            continue
+        pr.window_predict(theta, o, u, y, xs, vs, zs, k, grad)
+        h = 1e-6
+        fd = np.empty(theta.size)
+        same_zone = True
+        for r in range(theta.size):
+            tp, tm = theta.copy(), theta.copy()
+            tp[r] += h
+            tm[r] -= h
+            yp, _ = pr.window_predict(tp, o, u, y, xs, vs, zs, k, g2)
+            ym, _ = pr.window_predict(tm, o, u, y, xs, vs, zs, k, g2)
+            fd[r] = (yp - ym) / (2 * h)
+        # skip samples within h of a switching point: compare zones
+        for j in range(o[3] + 1):
+            t = k - o[5] - j
+            x = pr.l1_output(theta, o, u, xs, t)
+            m1, m2, D1, D2 = theta[4:8]
+            margins = [abs(x - (vs[t - 1] / m1 + D1)),
+                       abs(x - (vs[t - 1] / m2 - D2)), abs(x - xs[t - 1])]
+            same_zone &= min(margins) > 1e-3
+            zones_seen.add(int(zs[t]))
+        if same_zone:
+            np.testing.assert_allclose(grad, fd, rtol=1e-6, atol=1e-7)
+            checked += 1
+    assert checked > 20 and zones_seen == {-1, 0, 1}
+
+
+def test_exact_sensitivities_match_finite_differences(rng):
+    """Recursive output-error sensitivities through L1, memory and L2."""
+    o = ORDERS
+    theta = _theta(rng, o)
+    u = rng.normal(0, 1, 200)
+    yhat, J, zones = pr.simulate_with_sensitivities(theta, o, u)
+    assert set(np.unique(zones)) == {-1, 0, 1}
+    h = 1e-7
+    for r in range(theta.size):
+        tp, tm = theta.copy(), theta.copy()
+        tp[r] += h
+        tm[r] -= h
+        yp, _, zp = pr.simulate_with_sensitivities(tp, o, u)
+        ym, _, zm = pr.simulate_with_sensitivities(tm, o, u)
+        # compare up to the first sample where a zone flips under +-h
+        flip = np.flatnonzero((zp != zones) | (zm != zones))
+        end = flip[0] if flip.size else u.size
+        assert end > 50
+        np.testing.assert_allclose(J[:end, r], ((yp - ym) / (2 * h))[:end],
+                                   rtol=1e-5, atol=1e-6)
+    # memory zone: the sensitivity is carried over, not zero
+    mem = np.flatnonzero(zones == 0)
+    assert np.any(np.abs(J[mem]) > 1e-3)
+
+
+def test_simplex_qp_on_simplex_and_descent(rng):
+    for n in (2, 4, 6):
+        H = rng.normal(0, 1, (n, 5))
+        beta = np.concatenate([[0.0], rng.uniform(0, 0.5, n - 1)])
+        lam = simplex_qp(H @ H.T, beta)
+        assert np.all(lam >= 0) and lam.sum() == pytest.approx(1, abs=1e-12)
+        # independent oracle: SLSQP on the same dual problem
+        obj = lambda l: 0.5 * np.sum((l @ H) ** 2) + l @ beta
+        ref = minimize(obj, np.full(n, 1 / n), method='SLSQP',
+                       bounds=[(0, None)] * n,
+                       constraints=[{'type': 'eq',
+                                     'fun': lambda l: l.sum() - 1}],
+                       options={'ftol': 1e-14, 'maxiter': 500})
+        assert obj(lam) <= ref.fun + 1e-7
+        t = -lam @ H
+        phi = -t @ t - lam @ beta                                # (3.6)
+        # (t, phi) is feasible for the primal (3.4): every cut lies below
+        assert np.max(-beta + H @ t) <= phi + 1e-6
+        # and t is a descent direction of the current subgradient (row 0)
+        assert H[0] @ t <= phi + 1e-6 < 0
+
+
+def _tiny_problem(target):
+    """y_hat(k) = v(k) = m1 (u(k) - D1): only the backlash, u(k) = 2."""
+    o = (0, 0, 0, 0, 0, 0)
+    pad = pr.padding(o)
+    u, y = np.zeros(pad + 1), np.zeros(pad + 1)
+    u[pad], y[pad] = 2.0, target
+    xs, vs, ys = np.zeros(pad + 1), np.zeros(pad + 1), np.zeros(pad + 1)
+    zs = np.zeros(pad + 1, dtype=np.int64)
+    return o, pad, u, y, xs, vs, zs, ys
+
+
+def _finish(theta, H, eta0, eta_max, target=3.0):
+    o, k, u, y, xs, vs, zs, ys = _tiny_problem(target)
+    grad = np.zeros(4)
+    f0, e0 = rc._cost(theta, o, u, y, y, xs, vs, zs, k, grad)
+    out = [np.zeros(4) for _ in range(3)]
+    kind, eta, phi = rc.bundle_finish(
+        theta, np.ones(1), H, np.zeros(1), 1, f0, e0, o, u, y, y, xs, vs, zs,
+        ys, k, eta0, eta_max, 0.5, 10, 0.1, 0.5, 0.5, 1e-4, False, 1e-6,
+        out[0], out[1], out[2], grad)
+    f_new, _ = rc._cost(out[0], o, u, y, y, xs, vs, zs, k, grad)
+    return kind, eta, phi, f0, f_new, out[0], out[1]
+
+
+def _subgradient(theta, target=3.0):
+    o, k, u, y, xs, vs, zs, ys = _tiny_problem(target)
+    grad = np.zeros(4)
+    f0, e0 = rc._cost(theta, o, u, y, y, xs, vs, zs, k, grad)
+    return (-e0 * grad)[None, :]
+
+
+def test_line_search_step_classification():
+    theta = np.array([1.0, 1.0, 0.5, 0.5])       # y_hat = 1.5, target 3
+    H = _subgradient(theta)
+    # small eta0: the first trial step satisfies (3.8): a long step
+    kind, eta, phi, f0, f_new, new, trial = _finish(theta, H, 0.01, 0.01)
+    assert kind == rc.LONG and eta == 0.01 and phi < 0
+    assert f_new <= f0 + 0.1 * eta * phi
+    np.testing.assert_array_equal(trial, new)
+    # eta0 = 1 overshoots the minimum; backtracking gives a short step
+    kind, eta, phi, f0, f_new, new, trial = _finish(theta, H, 1.0, 1.0)
+    assert kind == rc.SHORT and 0 < eta < 1 and f_new < f0
+    assert not np.allclose(trial, new)        # theta* = theta + eta* t
+    # an ascent "subgradient" admits no step: a null step
+    kind, eta, phi, f0, f_new, new, trial = _finish(theta, -H, 0.5, 0.5)
+    assert kind == rc.NULL and eta == 0 and f_new == f0
+    np.testing.assert_array_equal(new, theta)
+    assert not np.allclose(trial, theta)
+    # a zero subgradient: phi = 0 >= -delta, the stopping test (Step 2)
+    kind, *_ = _finish(theta, np.zeros((1, 4)), 0.5, 0.5)
+    assert kind == rc.STOP
+
+
+def _paper_data(n, seed, snr=None):
+    plant = sw.examples.paper_plant()
+    u = sw.examples.paper_input(n, seed=seed)
+    y = plant.simulate(u).outputs
+    if snr is not None:
+        noise = np.random.default_rng(seed + 1000).standard_normal(n)
+        y = y + noise * np.sqrt(np.var(y) / snr)
+    return plant, u, y
+
+
+def test_bundle_recovers_paper_parameters_noise_free():
+    plant, u, y = _paper_data(8000, seed=11)
+    res = sw.identify(u, y, **plant.orders, method='bundle')
+    assert res.success
+    assert isinstance(res.model, sw.SandwichSystem)
+    err = res.parameter_error(plant.theta)
+    assert err[-1] < 0.01, err[-1]
+    assert np.all(np.isfinite(res.history))
+    assert res.counts['long'] > 0 and sum(res.counts.values()) == u.size
+    np.testing.assert_allclose(res.model.theta, res.theta)
+
+
+def test_gradient_baseline_runs_and_reduces_error():
+    plant, u, y = _paper_data(8000, seed=12)
+    res = sw.identify(u, y, **plant.orders, method='gradient')
+    err = res.parameter_error(plant.theta)
+    assert res.success and res.counts['skip'] > 0
+    assert err[-1] < 0.9 * err[0]
+
+
+def test_streaming_equals_identify():
+    plant, u, y = _paper_data(600, seed=13)
+    res = sw.identify(u, y, **plant.orders)
+    est = sw.RecursiveIdentifier(**plant.orders)
+    errors = [est.update(uk, yk) for uk, yk in zip(u, y)]
+    np.testing.assert_array_equal(est.theta, res.theta)
+    np.testing.assert_array_equal(errors, res.errors)
+
+
+def test_divergence_is_reported_not_silent():
+    plant, u, y = _paper_data(3000, seed=14)
+    with pytest.warns(RuntimeWarning, match='diverged at sample'):
+        res = sw.identify(u, y, **plant.orders, method='gradient', mu=5.0,
+                          skip_nonsmooth=False)
+    assert not res.success and 'diverged' in res.message
+    assert np.all(np.isfinite(res.theta))
+    assert res.history.shape[0] < u.size
+
+
+def test_result_plots_and_repr():
+    plant, u, y = _paper_data(400, seed=15)
+    res = sw.identify(u, y, **plant.orders)
+    axes = res.plot_convergence(true_theta=plant.theta)
+    assert len(axes.flat) >= 9
+    assert 'IdentificationResult (bundle)' in repr(res)
+
+
+@pytest.mark.parametrize('kwargs, exc, match', [
+    (dict(y=np.zeros(999)), ValueError, 'same length; got 1000 and 999'),
+    (dict(u=np.r_[np.zeros(999), np.nan]), ValueError,
+     'u must be finite; sample 999 is nan'),
+    (dict(u=np.zeros(50), y=np.zeros(50)), ValueError, 'too few'),
+    (dict(k1=0), ValueError, 'k1 must be an integer >= 1'),
+    (dict(q=0.5), ValueError, r'q must be in \(0, 0.5\)'),
+    (dict(q_star=0.05), ValueError, r'q_star must be in \(q, 1\)'),
+    (dict(eta0=0), ValueError, 'eta0 must be a finite number > 0'),
+    (dict(eta0=2), ValueError, r'eta0 must be in \(0, 1\]'),
+    (dict(gamma=-1), ValueError, 'gamma must be a finite number >= 0'),
+    (dict(delta=0), ValueError, 'delta must be a finite number > 0'),
+    (dict(method='newton'), ValueError, 'method must be one of'),
+    (dict(mu=0.1), TypeError, "unknown option"),
+    (dict(predictor='armax'), ValueError, 'predictor must be'),
+    (dict(theta0=np.zeros(9)), ValueError, 'theta0 must have m1, m2 > 0'),
+    (dict(theta0=np.ones(8)), ValueError, 'theta0 must be a 1-D array of '
+                                          'length 9'),
+])
+def test_bad_input(kwargs, exc, match):
+    args = dict(u=np.ones(1000), y=np.ones(1000), na=2, nb=0, nc=2, nd=1)
+    args.update(kwargs)
+    with pytest.raises(exc, match=match):
+        sw.identify(**args)

@@ -1,0 +1,230 @@
+"""Tests of the validation measures and `compare` against hand values."""
+
+import control as ct
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+
+import sandwichctl as sw
+
+
+@pytest.fixture
+def plant():
+    return sw.examples.paper_plant()
+
+
+# --- fit_percent / nrmse -------------------------------------------------
+
+@pytest.mark.parametrize('y, yhat, expected', [
+    # ||y - yhat|| = 1, ||y - mean|| = sqrt(2)
+    ([1.0, 2.0, 3.0], [1.0, 2.0, 4.0], 1 / np.sqrt(2)),
+    # error is half the signal: NRMSE 0.5
+    ([0.0, 1.0, 0.0, -1.0], [0.0, 0.5, 0.0, -0.5], 0.5),
+    # predicting the mean: NRMSE 1
+    ([1.0, 3.0, 5.0], [3.0, 3.0, 3.0], 1.0),
+    # perfect
+    ([2.0, -1.0, 7.0], [2.0, -1.0, 7.0], 0.0),
+    # sign flip of a zero-mean signal: ||2y|| / ||y|| = 2
+    ([1.0, -1.0, 2.0, -2.0], [-1.0, 1.0, -2.0, 2.0], 2.0),
+])
+def test_nrmse_and_fit_hand_values(y, yhat, expected):
+    np.testing.assert_allclose(sw.nrmse(y, yhat), expected, rtol=1e-15,
+                               atol=0)
+    np.testing.assert_allclose(sw.fit_percent(y, yhat),
+                               100 * (1 - expected), rtol=1e-13, atol=1e-13)
+
+
+def test_fit_is_offset_invariant(rng):
+    y = rng.standard_normal(200)
+    yhat = y + 0.1 * rng.standard_normal(200)
+    np.testing.assert_allclose(sw.fit_percent(y + 10, yhat + 10),
+                               sw.fit_percent(y, yhat), rtol=1e-12)
+
+
+def test_accepts_column_vectors():
+    y = np.array([[1.0], [2.0], [3.0]])
+    assert sw.nrmse(y, y.T) == 0.0
+
+
+@pytest.mark.parametrize('func', [sw.nrmse, sw.fit_percent,
+                                  sw.max_relative_error])
+def test_shape_mismatch_is_rejected(func):
+    with pytest.raises(ValueError, match=r"same number of samples; got 3 "
+                                         r"and 2"):
+        func([1.0, 2.0, 3.0], [1.0, 2.0])
+
+
+@pytest.mark.parametrize('func', [sw.nrmse, sw.fit_percent,
+                                  sw.max_relative_error])
+@pytest.mark.parametrize('which', ['y', 'yhat'])
+def test_nan_is_rejected(func, which):
+    good, bad = [1.0, 2.0, 3.0], [1.0, np.nan, 3.0]
+    args = (bad, good) if which == 'y' else (good, bad)
+    with pytest.raises(ValueError, match=rf"{which} must be finite; "
+                                         r"sample 1 is nan"):
+        func(*args)
+
+
+def test_two_dimensional_signal_is_rejected():
+    with pytest.raises(ValueError, match=r"y must be a 1-D array"):
+        sw.nrmse(np.ones((3, 2)), np.ones((3, 2)))
+
+
+@pytest.mark.parametrize('func', [sw.nrmse, sw.fit_percent])
+def test_constant_y_is_rejected(func):
+    with pytest.raises(ValueError, match=r"y is constant"):
+        func([2.0, 2.0, 2.0], [1.0, 2.0, 3.0])
+
+
+# --- max_relative_error --------------------------------------------------
+
+def test_max_relative_error_hand_values():
+    y = [1.0, -2.0, 4.0]
+    yhat = [1.5, -2.0, 3.0]
+    # largest error 1.0 at k = 2; max|y| = 4; range = 6
+    assert sw.max_relative_error(y, yhat) == 0.25
+    np.testing.assert_allclose(sw.max_relative_error(y, yhat, 'range'),
+                               1 / 6, rtol=1e-15)
+    assert sw.max_relative_error(y, y) == 0.0
+
+
+def test_max_relative_error_negative_peak():
+    # the peak magnitude counts, whatever its sign
+    assert sw.max_relative_error([-5.0, 1.0], [-4.0, 1.0]) == 0.2
+
+
+def test_max_relative_error_bad_scale():
+    with pytest.raises(ValueError, match=r"scale must be 'peak' or 'range'"
+                                         r"; got 'max'"):
+        sw.max_relative_error([1.0, 2.0], [1.0, 2.0], scale='max')
+
+
+def test_max_relative_error_zero_denominator():
+    with pytest.raises(ValueError, match=r"peak magnitude"):
+        sw.max_relative_error([0.0, 0.0], [1.0, 0.0])
+    with pytest.raises(ValueError, match=r"range"):
+        sw.max_relative_error([3.0, 3.0], [1.0, 0.0], scale='range')
+
+
+# --- compare -------------------------------------------------------------
+
+def test_compare_true_model_is_perfect(plant):
+    u = sw.examples.paper_input(300, seed=3)
+    y = plant.simulate(u).outputs
+    result = sw.compare(plant, u, y, plot=False)
+    assert isinstance(result, sw.CompareResult)
+    assert result.fit == 100.0
+    assert result.nrmse == 0.0
+    assert result.max_relative_error == 0.0
+    np.testing.assert_array_equal(result.yhat, y)
+    np.testing.assert_array_equal(result.timepts, np.arange(300))
+    assert result.ax is None
+
+
+def test_compare_numbers_match_the_measures(plant, rng):
+    u = sw.examples.paper_input(400, seed=4)
+    y = plant.simulate(u).outputs + 0.1 * rng.standard_normal(400)
+    result = sw.compare(plant, u, y, plot=False)
+    yhat = plant.simulate(u).outputs
+    np.testing.assert_array_equal(result.yhat, yhat)
+    assert result.fit == sw.fit_percent(y, yhat)
+    assert result.nrmse == sw.nrmse(y, yhat)
+    assert result.max_relative_error == sw.max_relative_error(y, yhat)
+    np.testing.assert_array_equal(result.error, y - yhat)
+    assert result.as_dict() == {
+        'name': 'paper', 'fit': result.fit, 'nrmse': result.nrmse,
+        'max_relative_error': result.max_relative_error}
+    assert 'fit=' in repr(result)
+
+
+def test_compare_initial_state(plant):
+    u = sw.examples.paper_input(50, seed=5)
+    x0 = np.arange(1.0, plant.nstates + 1)
+    y = plant.simulate(u, initial_state=x0).outputs
+    assert sw.compare(plant, u, y, initial_state=x0, plot=False).fit == 100
+    assert sw.compare(plant, u, y, plot=False).fit < 100
+
+
+def test_compare_several_models_and_plot(plant):
+    u = sw.examples.paper_input(300, seed=6)
+    y = plant.simulate(u).outputs
+    worse = sw.SandwichSystem.from_theta(
+        plant.theta * 1.05, **plant.orders, dt=plant.dt, name='worse')
+    linear = ct.tf([3.0, -0.15], [1, 1.3, 0.64, 0.064], 1, name='linear')
+    fig, ax = plt.subplots()
+    results = sw.compare([plant, worse, linear], u, y, ax=ax)
+    plt.close(fig)
+    assert isinstance(results, sw.CompareResultList)
+    assert [r.name for r in results] == ['paper', 'worse', 'linear']
+    assert results[0].fit == 100.0
+    assert 0 < results[1].fit < 100
+    # the linear reference is run through python-control
+    ylin = ct.forced_response(linear, np.arange(300), u).outputs
+    np.testing.assert_allclose(results[2].yhat, ylin, rtol=1e-12,
+                               atol=1e-12)
+    np.testing.assert_array_equal(results.fit, [r.fit for r in results])
+    assert results.nrmse.shape == results.max_relative_error.shape == (3,)
+    assert all(r.ax is ax for r in results)
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert legend[0] == 'measured'
+    assert legend[1] == 'paper: fit 100.0 %'
+    assert legend[2] == f"worse: fit {results[1].fit:.1f} %"
+    assert len(ax.get_lines()) == 4
+    assert str(results).splitlines()[0].split() == [
+        'model', 'fit', '%', 'nrmse', 'max', 'rel', 'err']
+
+
+def test_compare_nonlinear_iosystem_uses_python_control(plant):
+    u = sw.examples.paper_input(40, seed=7)
+    y = plant.simulate(u).outputs
+    bl = sw.Backlash(1.0, 1.0, 0.2, 0.2, dt=1, name='bl')
+    result = sw.compare(bl, u, y, plot=False, labels='backlash only')
+    np.testing.assert_allclose(result.yhat, bl.response(u), rtol=1e-14)
+    assert result.name == 'backlash only'
+
+
+def test_compare_result_plot(plant):
+    u = sw.examples.paper_input(30, seed=8)
+    result = sw.compare(plant, u, plant.simulate(u).outputs, plot=False)
+    fig, ax = plt.subplots()
+    assert result.plot(ax) is ax
+    plt.close(fig)
+
+
+def test_compare_timepts_for_sampled_model():
+    plant = sw.examples.paper_plant(dt=0.5)
+    u = sw.examples.paper_input(10, seed=9)
+    result = sw.compare(plant, u, plant.simulate(u).outputs, plot=False)
+    np.testing.assert_allclose(result.timepts, 0.5 * np.arange(10))
+
+
+def test_compare_errors(plant):
+    u = np.ones(5)
+    with pytest.raises(ValueError, match=r"u and y must have the same "
+                                         r"number of samples; got 5 and 4"):
+        sw.compare(plant, u, np.arange(4.0), plot=False)
+    with pytest.raises(ValueError, match=r"y must be finite"):
+        sw.compare(plant, u, [0, 1, np.nan, 2, 3], plot=False)
+    with pytest.raises(TypeError, match=r"model must be a SandwichSystem "
+                                        r"or a python-control system"):
+        sw.compare(lambda u: u, u, np.arange(5.0), plot=False)
+    with pytest.raises(ValueError, match=r"single-input single-output"):
+        sw.compare(ct.ss(np.eye(2) * 0.5, np.eye(2), np.eye(2), 0, 1), u,
+                   np.arange(5.0), plot=False)
+    with pytest.raises(ValueError, match=r"labels must have one entry per "
+                                         r"model \(1\); got 2"):
+        sw.compare(plant, u, np.arange(5.0), labels=['a', 'b'], plot=False)
+    with pytest.raises(ValueError, match=r"non-empty list"):
+        sw.compare([], u, np.arange(5.0), plot=False)
+    with pytest.raises(ValueError, match=r"timepts is required for a "
+                                         r"continuous-time model"):
+        sw.compare(ct.tf(1, [1, 1]), u, np.arange(5.0), plot=False)
+    with pytest.raises(ValueError, match=r"y is constant"):
+        sw.compare(plant, u, np.zeros(5), plot=False)
+
+
+def test_compare_unstable_model_reports_instead_of_nan():
+    unstable = ct.tf([1.0], [1, -10.0], 1, name='unstable')
+    u = np.ones(400)
+    with pytest.raises(ValueError, match=r"not finite .* unstable"):
+        sw.compare(unstable, u, np.arange(400.0), plot=False)
