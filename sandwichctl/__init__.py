@@ -17,5 +17,6 @@ from .validation import *
 from .plotting import *
 from .io import *
 from .identify import *
+from .refine import *
 
 __version__ = '0.1.0'

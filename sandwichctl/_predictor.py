@@ -131,13 +131,17 @@ def store_state(theta, o, u, ystar_src, xs, vs, zs, ys, k, grad):
 
 
 @numba.njit(cache=True)
-def oe_step(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k):
+def oe_step(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k, ymeas=None):
     """One step of the output-error (simulation) model with sensitivities.
 
     Computes x_hat(k), v_hat(k), zone(k), y_hat(k) from the stored past
     and their exact derivatives with respect to theta, Sx[k], Sv[k],
     Sy[k] (rows of p entries), carried recursively through L1, the
     backlash memory and L2. Returns y_hat(k).
+
+    If `ymeas` is given, L2's AR part uses the measured past outputs
+    instead (series-parallel); then Sy has no recursion through L2's
+    poles, but the L1 and backlash sensitivities stay exact.
     """
     na, nb, nc, nd, q1, q2 = o
     ia, im, ib, idd = _idx(o)
@@ -173,26 +177,56 @@ def oe_step(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k):
             Sv[k, im + 1] += x + D2
             Sv[k, im + 3] += m2
     # L2, eq. (2.1)
+    parallel = ymeas is None
+    past = ys if parallel else ymeas
     y = 0.0
     for i in range(1, nc + 1):
-        y -= theta[i - 1] * ys[k - i]
+        y -= theta[i - 1] * past[k - i]
     for j in range(nd + 1):
         dj = 1.0 if j == 0 else theta[idd + j - 1]
         y += dj * vs[k - q2 - j]
     ys[k] = y
     for r in range(p):
         acc = 0.0
-        for i in range(1, nc + 1):
-            acc -= theta[i - 1] * Sy[k - i, r]
+        if parallel:
+            for i in range(1, nc + 1):
+                acc -= theta[i - 1] * Sy[k - i, r]
         for j in range(nd + 1):
             dj = 1.0 if j == 0 else theta[idd + j - 1]
             acc += dj * Sv[k - q2 - j, r]
         Sy[k, r] = acc
     for i in range(1, nc + 1):
-        Sy[k, i - 1] -= ys[k - i]
+        Sy[k, i - 1] -= past[k - i]
     for j in range(1, nd + 1):
         Sy[k, idd + j - 1] += vs[k - q2 - j]
     return y
+
+
+@numba.njit(cache=True)
+def is_stable(theta, start, n, margin):
+    """True if z^n + theta[start] z^(n-1) + ... has all roots inside
+    |z| < 1 - margin (Schur-Cohn step-down test on the scaled polynomial).
+    """
+    if n == 0:
+        return True
+    r = 1.0 - margin
+    a = np.empty(n + 1)
+    a[0] = 1.0
+    scale = 1.0
+    for i in range(1, n + 1):
+        scale /= r                       # roots of p(r z) inside |z| < 1
+        a[i] = theta[start + i - 1] * scale
+    b = np.empty(n + 1)
+    for m in range(n, 0, -1):
+        kr = a[m]
+        if not abs(kr) < 1.0:
+            return False
+        den = 1.0 - kr * kr
+        for j in range(m + 1):
+            b[j] = (a[j] - kr * a[m - j]) / den
+        for j in range(m + 1):
+            a[j] = b[j]
+    return True
 
 
 @numba.njit(cache=True)

@@ -12,7 +12,7 @@ and null steps, and stores the new estimate's internal signals.
 import numba
 import numpy as np
 
-from ._predictor import window_predict, store_state, oe_step, _idx
+from ._predictor import window_predict, store_state, oe_step, is_stable, _idx
 
 __all__ = []
 
@@ -181,3 +181,120 @@ def gradient_run(theta, o, u, y, series_parallel, xs, vs, zs, ys, k0, k1,
             history[k, r] = theta[r]
         store_state(theta, o, u, ystar, xs, vs, zs, ys, k, grad)
     return -1
+
+
+RPEM_OK, RPEM_LIMITED, RPEM_REJECTED, RPEM_RESET = 8, 5, 6, 7
+
+
+@numba.njit(cache=True)
+def _admissible(theta, o):
+    """Both denominators stable (|poles| < 0.999) and finite."""
+    for r in range(theta.size):
+        if not np.isfinite(theta[r]):
+            return False
+    na, nc = o[0], o[2]
+    return is_stable(theta, nc, na, 1e-3) and is_stable(theta, 0, nc, 1e-3)
+
+
+@numba.njit(cache=True)
+def rpem_run(theta, P, o, u, y, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1,
+             n_before, warmup, lam_state, lam0, P0, p_max, max_step, m_min,
+             err_limit, history, errors, kinds, psi, Ppsi, dtheta, trial):
+    """Recursive prediction-error (Gauss-Newton) estimator, samples k0..k1-1.
+
+    Output-error predictor with exact recursive sensitivities (`oe_step`);
+    for the first `warmup` samples the predictor is series-parallel.
+    Forgetting factor lam(k) = lam0 lam(k-1) + 1 - lam0 (lam_state[0]).
+    Safeguards: the step is limited to `max_step` (2-norm); it is halved
+    until m1, m2 >= m_min, D >= 0 and L1, L2 are stable, else rejected;
+    P is reset to P0 I if its trace exceeds p_max or turns non-finite; a
+    non-finite or huge prediction error resets the model's stored signals
+    and P. Returns the number of P resets.
+    """
+    p = theta.size
+    resets = 0
+    for k in range(k0, k1):
+        sp = (n_before + k - k0) < warmup
+        if sp:
+            yhat = oe_step(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k, y)
+        else:
+            yhat = oe_step(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k)
+        e = y[k] - yhat
+        errors[k] = e
+        kind = RPEM_OK
+        if not np.isfinite(e) or abs(e) > err_limit:
+            # the simulated model ran away: restart its signals and P
+            for t in range(k - 30 if k >= 30 else 0, k + 1):
+                xs[t] = 0.0
+                vs[t] = 0.0
+                ys[t] = y[t]
+                zs[t] = 0
+                for r in range(p):
+                    Sx[t, r] = 0.0
+                    Sv[t, r] = 0.0
+                    Sy[t, r] = 0.0
+            for i in range(p):
+                for j in range(p):
+                    P[i, j] = P0 if i == j else 0.0
+            resets += 1
+            kinds[k] = RPEM_RESET
+            for r in range(p):
+                history[k, r] = theta[r]
+            continue
+        lam = lam_state[0]
+        for r in range(p):
+            psi[r] = Sy[k, r]
+        s = lam
+        for i in range(p):
+            acc = 0.0
+            for j in range(p):
+                acc += P[i, j] * psi[j]
+            Ppsi[i] = acc
+            s += psi[i] * acc
+        norm2 = 0.0
+        for r in range(p):
+            dtheta[r] = Ppsi[r] / s * e
+            norm2 += dtheta[r] * dtheta[r]
+        if norm2 > max_step * max_step:
+            scale = max_step / np.sqrt(norm2)
+            for r in range(p):
+                dtheta[r] *= scale
+            kind = RPEM_LIMITED
+        accepted = False
+        for _ in range(8):
+            for r in range(p):
+                trial[r] = theta[r] + dtheta[r]
+            project(trial, o, m_min)
+            if _admissible(trial, o):
+                accepted = True
+                break
+            for r in range(p):
+                dtheta[r] *= 0.5
+            kind = RPEM_LIMITED
+        if accepted:
+            for r in range(p):
+                theta[r] = trial[r]
+        else:
+            kind = RPEM_REJECTED
+        # covariance update (also after a rejected step: data still inform)
+        tr = 0.0
+        for i in range(p):
+            for j in range(p):
+                P[i, j] = (P[i, j] - Ppsi[i] * Ppsi[j] / s) / lam
+        for i in range(p):
+            for j in range(i + 1, p):
+                avg = 0.5 * (P[i, j] + P[j, i])
+                P[i, j] = avg
+                P[j, i] = avg
+            tr += P[i, i]
+        if not np.isfinite(tr) or tr > p_max:
+            for i in range(p):
+                for j in range(p):
+                    P[i, j] = P0 if i == j else 0.0
+            resets += 1
+            kind = RPEM_RESET
+        lam_state[0] = lam0 * lam + 1.0 - lam0
+        kinds[k] = kind
+        for r in range(p):
+            history[k, r] = theta[r]
+    return resets

@@ -30,8 +30,9 @@ from scipy.optimize import OptimizeResult
 
 from ._predictor import padding, store_state
 from ._qp import simplex_qp, QPError
-from ._recursive import (bundle_prepare, bundle_finish, gradient_run, LONG,
-                         SHORT, NULL, STOP, SKIP)
+from ._recursive import (bundle_prepare, bundle_finish, gradient_run,
+                         rpem_run, LONG, SHORT, NULL, STOP, SKIP, RPEM_OK,
+                         RPEM_LIMITED, RPEM_REJECTED, RPEM_RESET)
 from .sandwich import SandwichSystem, theta_labels
 from ._validation import (check_int, check_positive, check_nonnegative,
                           check_signal, check_vector, check_finite)
@@ -40,7 +41,8 @@ __all__ = ['identify', 'RecursiveIdentifier', 'IdentificationResult',
            'parameter_error']
 
 _KIND_NAMES = {LONG: 'long', SHORT: 'short', NULL: 'null', STOP: 'stop',
-               SKIP: 'skip'}
+               SKIP: 'skip', RPEM_LIMITED: 'limited',
+               RPEM_REJECTED: 'rejected', RPEM_RESET: 'reset', RPEM_OK: 'ok'}
 
 #: Default options of each recursive method (paper symbols where defined).
 DEFAULTS = {
@@ -51,6 +53,9 @@ DEFAULTS = {
     'gradient': dict(mu=0.009, skip_nonsmooth=True,
                      predictor='series-parallel', m_min=1e-6,
                      divergence_limit=1e6),
+    'rpem': dict(lam0=0.99, lam_start=0.95, P0=10.0, p_max=1e6,
+                 max_step=0.5, warmup=0, m_min=1e-6, err_limit=1e6,
+                 divergence_limit=1e6),
 }
 
 _CHUNK = 4096
@@ -96,6 +101,17 @@ def _check_options(method, options):
             f"unknown option(s) {sorted(unknown)} for method={method!r}; "
             f"valid options are {sorted(DEFAULTS[method])}")
     opt = dict(DEFAULTS[method], **options)
+    if method == 'rpem':
+        for name in ('lam0', 'lam_start'):
+            val = check_finite(name, opt[name])
+            if not 0 < val <= 1:
+                raise ValueError(f"{name} must be in (0, 1]; got {val}")
+            opt[name] = val
+        for name in ('P0', 'p_max', 'max_step', 'm_min', 'err_limit',
+                     'divergence_limit'):
+            opt[name] = check_positive(name, opt[name])
+        opt['warmup'] = check_int('warmup', opt['warmup'])
+        return opt
     if opt['predictor'] not in ('series-parallel', 'parallel'):
         raise ValueError(f"predictor must be 'series-parallel' or "
                          f"'parallel'; got {opt['predictor']!r}")
@@ -214,6 +230,13 @@ class RecursiveIdentifier:
         self.counts = {name: 0 for name in _KIND_NAMES.values()}
         self.diverged_at = None
         self._hist, self._err, self._kind = [], [], []
+        if method == 'rpem':
+            self._S = [np.zeros((cap, p)) for _ in range(3)]
+            self._P = self.options['P0'] * np.eye(p)
+            self._lam = np.array([self.options['lam_start']])
+            self._rbuf = (np.zeros((cap, p)), np.zeros(cap),
+                          np.zeros(cap, dtype=np.int64))
+            self._rwork = [np.zeros(p) for _ in range(4)]
         if method == 'bundle':
             k1 = self.options['k1']
             self._trials = np.zeros((max(k1 - 1, 1), p))
@@ -277,8 +300,10 @@ class RecursiveIdentifier:
 
     def _shift(self):
         pad = self._pad
-        for arr in (self._u, self._y, self._xs, self._vs, self._ys,
-                    self._zs):
+        arrays = [self._u, self._y, self._xs, self._vs, self._ys, self._zs]
+        if self.method == 'rpem':
+            arrays += self._S
+        for arr in arrays:
             arr[:pad] = arr[self._pos - pad:self._pos]
         self._pos = pad
 
@@ -305,7 +330,24 @@ class RecursiveIdentifier:
         """Process buffer positions k0..k1-1; return how many were done."""
         if self.method == 'gradient':
             return self._run_gradient(k0, k1, errors)
+        if self.method == 'rpem':
+            return self._run_rpem(k0, k1, errors)
         return self._run_bundle(k0, k1, errors)
+
+    def _run_rpem(self, k0, k1, errors):
+        opt = self.options
+        hist, err, kinds = self._rbuf
+        theta = self._theta.copy()
+        rpem_run(theta, self._P, self._o, self._u, self._y, self._xs,
+                 self._vs, self._zs, self._ys, *self._S, k0, k1,
+                 self.n_samples, opt['warmup'], self._lam, opt['lam0'],
+                 opt['P0'], opt['p_max'], opt['max_step'], opt['m_min'],
+                 opt['err_limit'], hist, err, kinds, *self._rwork)
+        for k in range(k0, k1):
+            self._record(hist[k], err[k], kinds[k])
+        errors[:] = err[k0:k1]
+        self._theta = theta
+        return k1 - k0
 
     def _run_gradient(self, k0, k1, errors):
         opt = self.options
@@ -496,36 +538,53 @@ class IdentificationResult(OptimizeResult):
         return axes
 
 
-def identify(u, y, na, nb, nc, nd, q1=1, q2=1, method='bundle', theta0=None,
-             dt=True, progress=False, **options):
+def identify(u, y, na, nb, nc, nd, q1=1, q2=1, method='oe', theta0=None,
+             dt=True, refine=None, progress=False, **options):
     r"""Identify a sandwich system from input/output data.
 
     Parameters
     ----------
     u, y : array_like, shape (N,)
-        Measured input and output.
+        Measured input and output (the system starts at rest).
     na, nb, nc, nd : int
         Orders of eq. (2.1); nb and nd count coefficients after
         b0 = d0 = 1.
     q1, q2 : int, optional
         Known delays (default 1).
-    method : {'bundle', 'gradient'}, optional
-        Estimator; see the module documentation.
+    method : {'oe', 'rpem', 'bundle', 'gradient'}, optional
+        ``'oe'`` (default) is the library's best: a recursive
+        prediction-error pass started series-parallel (``'rpem'`` with
+        ``warmup=N``) gives the start of a batch output-error refinement
+        with multi-start (`refine`). ``'rpem'`` is the recursive
+        Gauss-Newton estimator alone; ``'bundle'`` and ``'gradient'`` are
+        the paper's method and its baseline. ``docs/algorithm.md`` gives
+        the measured table behind this default.
     theta0 : array_like, optional
         Starting point (order of eq. (2.5)).
     dt : float or True, optional
         Sampling time of the returned model.
+    refine : bool or dict, optional
+        Follow the recursive estimate by `refine` (a dict gives its
+        keyword arguments). Default: True for ``'oe'`` (with
+        ``n_starts=8``), False otherwise.
     progress : bool, optional
         Print progress to stderr on long runs.
     **options
-        Options of the method (see `RecursiveIdentifier`).
+        Options of the recursive method (see `RecursiveIdentifier`).
 
     Returns
     -------
     IdentificationResult
         With ``model`` (a normalised `SandwichSystem`), ``theta``,
         ``history``, ``errors``, step ``counts``, ``success`` and
-        ``message``.
+        ``message``. After refinement also ``std``, ``fit`` and
+        ``recursive`` (the recursive pass's result).
+
+    Warns
+    -----
+    RuntimeWarning
+        If the data barely excite the backlash or a parameter is poorly
+        determined (large standard error), or if the estimate diverged.
 
     Examples
     --------
@@ -534,7 +593,7 @@ def identify(u, y, na, nb, nc, nd, q1=1, q2=1, method='bundle', theta0=None,
     >>> u = sw.examples.paper_input(2000, seed=1)
     >>> y = plant.simulate(u).outputs
     >>> res = sw.identify(u, y, **plant.orders)
-    >>> res.success, res.model.orders == plant.orders
+    >>> res.success, bool(sw.parameter_error(res.theta, plant.theta) < 1e-3)
     (True, True)
     """
     u = check_signal('u', u)
@@ -542,7 +601,20 @@ def identify(u, y, na, nb, nc, nd, q1=1, q2=1, method='bundle', theta0=None,
     if u.size != y.size:
         raise ValueError(f"u and y must have the same length; got "
                          f"{u.size} and {y.size} samples")
-    est = RecursiveIdentifier(na, nb, nc, nd, q1, q2, method=method,
+    if np.ptp(u) == 0:
+        raise ValueError("u is constant; a constant input cannot excite "
+                         "the backlash or identify the dynamics. Use a "
+                         "persistently exciting input (e.g. noise, or "
+                         "steps plus sines)")
+    if method not in ('oe',) + tuple(DEFAULTS):
+        raise ValueError(f"method must be one of "
+                         f"{['oe'] + sorted(DEFAULTS)}; got {method!r}")
+    recursive = 'rpem' if method == 'oe' else method
+    if method == 'oe':
+        options = dict({'warmup': u.size}, **options)
+        if refine is None:
+            refine = {'n_starts': 8, 'seed': 0}
+    est = RecursiveIdentifier(na, nb, nc, nd, q1, q2, method=recursive,
                               theta0=theta0, dt=dt, **options)
     p = len(est.labels)
     needed = 10 * p + padding(est._o)
@@ -557,12 +629,43 @@ def identify(u, y, na, nb, nc, nd, q1=1, q2=1, method='bundle', theta0=None,
         for lo in range(0, u.size, step):
             est.update_many(u[lo:lo + step], y[lo:lo + step])
             if progress:
-                _progress(method, est.n_samples, u.size, start)
+                _progress(recursive, est.n_samples, u.size, start)
             if est.diverged_at is not None:
                 break
     for w in caught:
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    return est.result(elapsed=time.perf_counter() - start)
+    result = est.result(elapsed=time.perf_counter() - start)
+    if refine:
+        from .refine import refine as _refine
+        kwargs = refine if isinstance(refine, dict) else {}
+        refined = _refine(result.model, u, y, progress=progress, **kwargs)
+        refined.recursive = result
+        refined.history = result.history
+        refined.method = f"{recursive}+refine" if method != 'oe' else 'oe'
+        refined.elapsed = time.perf_counter() - start
+        result = refined
+    _check_excitation(result, u)
+    return result
+
+
+def _check_excitation(result, u):
+    """Warn if the identified backlash barely leaves its memory zone."""
+    model = result.model
+    with np.errstate(all='ignore'):
+        x = model.simulate(u, internal=True).outputs[1]
+    if not np.all(np.isfinite(x)):
+        result.excitation = np.nan          # unstable estimate: said already
+        return
+    _, zones = model.backlash.response(x, return_zones=True)
+    moving = float(np.mean(zones != 0))
+    result.excitation = moving
+    if moving < 0.01:
+        warnings.warn(
+            f"the backlash of the identified model is outside its memory "
+            f"zone in only {moving:.1%} of the samples: the data hardly "
+            f"excite it, so m1, m2, D1, D2 are unreliable (is the input "
+            f"amplitude smaller than the dead band?)", RuntimeWarning,
+            stacklevel=3)
 
 
 def _progress(method, done, total, start):

@@ -203,7 +203,7 @@ def test_gradient_baseline_runs_and_reduces_error():
 
 def test_streaming_equals_identify():
     plant, u, y = _paper_data(600, seed=13)
-    res = sw.identify(u, y, **plant.orders)
+    res = sw.identify(u, y, **plant.orders, method='bundle')
     est = sw.RecursiveIdentifier(**plant.orders)
     errors = [est.update(uk, yk) for uk, yk in zip(u, y)]
     np.testing.assert_array_equal(est.theta, res.theta)
@@ -222,7 +222,7 @@ def test_divergence_is_reported_not_silent():
 
 def test_result_plots_and_repr():
     plant, u, y = _paper_data(400, seed=15)
-    res = sw.identify(u, y, **plant.orders)
+    res = sw.identify(u, y, **plant.orders, method='bundle')
     axes = res.plot_convergence(true_theta=plant.theta)
     assert len(axes.flat) >= 9
     assert 'IdentificationResult (bundle)' in repr(res)
@@ -232,7 +232,8 @@ def test_result_plots_and_repr():
     (dict(y=np.zeros(999)), ValueError, 'same length; got 1000 and 999'),
     (dict(u=np.r_[np.zeros(999), np.nan]), ValueError,
      'u must be finite; sample 999 is nan'),
-    (dict(u=np.zeros(50), y=np.zeros(50)), ValueError, 'too few'),
+    (dict(u=np.sin(np.arange(50)), y=np.zeros(50)), ValueError, 'too few'),
+    (dict(u=np.ones(1000)), ValueError, 'u is constant'),
     (dict(k1=0), ValueError, 'k1 must be an integer >= 1'),
     (dict(q=0.5), ValueError, r'q must be in \(0, 0.5\)'),
     (dict(q_star=0.05), ValueError, r'q_star must be in \(q, 1\)'),
@@ -248,7 +249,8 @@ def test_result_plots_and_repr():
                                           'length 9'),
 ])
 def test_bad_input(kwargs, exc, match):
-    args = dict(u=np.ones(1000), y=np.ones(1000), na=2, nb=0, nc=2, nd=1)
+    args = dict(u=np.sin(np.arange(1000)), y=np.ones(1000), na=2, nb=0,
+                nc=2, nd=1, method='bundle')
     args.update(kwargs)
     with pytest.raises(exc, match=match):
         sw.identify(**args)

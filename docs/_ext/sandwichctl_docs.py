@@ -69,8 +69,8 @@ def public_modules(package):
     return known + sorted(set(names) - set(known))
 
 
-def _qualified_name(package, module, name):
-    """Name under which an object is documented.
+def _relative_name(package, module, name):
+    """Name, relative to `package`, under which an object is documented.
 
     Classes and functions re-exported by the package are documented as
     ``package.name``; data (whose ``#:`` comments autodoc reads from the
@@ -79,27 +79,28 @@ def _qualified_name(package, module, name):
     obj = getattr(module, name)
     flat = getattr(package, name, None) is obj
     if flat and (inspect.isclass(obj) or callable(obj)):
-        return f"{package.__name__}.{name}"
-    return f"{module.__name__}.{name}"
+        return name
+    return f"{module.__name__[len(package.__name__) + 1:]}.{name}"
 
 
-def _summary(module):
-    doc = inspect.getdoc(module) or ''
-    return doc.strip().split('\n\n')[0].replace('\n', ' ')
+def _autosummary(package, module):
+    return ['.. autosummary::', '   :toctree: generated', ''] + [
+        f"   {_relative_name(package, module, n)}"
+        for n in getattr(module, '__all__', [])]
 
 
 def _module_page(package, module):
     title = module.__name__
-    lines = [title, '=' * len(title), '',
-             f".. py:module:: {module.__name__}", '',
-             f".. sandwichctl-docstring:: {module.__name__}", '',
-             f".. currentmodule:: {package.__name__}", '']
-    names = list(getattr(module, '__all__', []))
-    if names:
-        lines += ['Contents', '--------', '', '.. autosummary::',
-                  '   :toctree: generated', '']
-        lines += [f"   {_qualified_name(package, module, n)}"
-                  for n in names]
+    lines = [title, '=' * len(title), '', f".. py:module:: {title}"]
+    # A module named like one of its functions (``sandwichctl.identify``)
+    # leaves the name to the function.
+    if getattr(package, title.rsplit('.', 1)[1], module) is not module:
+        lines.append('   :no-index:')
+    lines += ['', f".. sandwichctl-docstring:: {title}", '',
+              f".. currentmodule:: {package.__name__}", '']
+    if getattr(module, '__all__', None):
+        lines += ['Contents', '--------', '']
+        lines += _autosummary(package, module)
     return '\n'.join(lines) + '\n'
 
 
@@ -108,9 +109,10 @@ def _index_page(package, modules):
              '   :maxdepth: 1', '']
     lines += [f"   {name}" for name, _ in modules]
     lines += ['', 'All public names', '----------------', '',
+              f".. currentmodule:: {package.__name__}", '',
               '.. autosummary::', '']
     for _, module in modules:
-        lines += [f"   {_qualified_name(package, module, n)}"
+        lines += [f"   {_relative_name(package, module, n)}"
                   for n in getattr(module, '__all__', [])]
     return '\n'.join(lines) + '\n'
 
