@@ -11,6 +11,8 @@ being executed, and MathJax is only fetched by the browser.
 import os
 import sys
 
+import sphinx.ext.autosummary
+
 import sandwichctl
 
 sys.path.insert(0, os.path.abspath('_ext'))
@@ -48,6 +50,9 @@ sandwichctl_notebooks = '../notebooks'
 
 # -- autodoc, autosummary, numpydoc -----------------------------------------
 autosummary_generate = True
+# Summaries are the first sentence; "(eq. (2.2))" does not end one.
+sphinx.ext.autosummary.WELL_KNOWN_ABBREVIATIONS += (
+    'eq.', 'eqs.', 'Eq.', 'Eqs.')
 autosummary_imported_members = False
 autodoc_member_order = 'bysource'
 autodoc_typehints = 'none'
@@ -65,7 +70,7 @@ myst_enable_extensions = ['dollarmath', 'amsmath']
 myst_heading_anchors = 3
 nb_execution_mode = 'off'   # notebooks are committed without outputs
 
-# -- Figures (the plot directive runs its code at build time) ------------------
+# -- Figures (the plot directive runs its code at build time) --------------
 plot_include_source = True
 plot_html_show_source_link = False
 plot_html_show_formats = False

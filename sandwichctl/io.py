@@ -4,7 +4,11 @@
 file and `load_model` reads it back. The round trip is exact: floats are
 written with Python's shortest round-tripping ``repr``, so the loaded
 model has bitwise the same coefficients, the same `SandwichSystem.theta`
-and the same simulated output as the saved one.
+and the same simulated output as the saved one. (L1 and L2 are stored as
+the coefficients of eq. (2.1), so they are loaded with monic
+denominators; if the saved transfer functions were not monic, the loaded
+ones are the same systems scaled to monic form, whose simulated output
+agrees to rounding.)
 
 File format (version 1)
 -----------------------
@@ -296,5 +300,6 @@ def _json_default(obj):
 
 def _describe(path):
     if hasattr(path, 'read'):
-        return f"the file object {getattr(path, 'name', type(path).__name__)!r}"
+        name = getattr(path, 'name', type(path).__name__)
+        return f"the file object {name!r}"
     return f"{os.fspath(path)!r}"

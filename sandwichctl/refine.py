@@ -66,6 +66,8 @@ def _lm(theta, o, u, y, max_iter, tol, m_min):
     yhat, J, _ = simulate_with_sensitivities(theta, o, u)
     r = y - yhat
     cost = 0.5 * r @ r
+    if not np.isfinite(cost):
+        cost = np.inf
     mu = 1e-3
     history = [theta.copy()]
     message = f"reached max_iter = {max_iter}"
@@ -99,7 +101,8 @@ def _lm(theta, o, u, y, max_iter, tol, m_min):
         if not accepted:
             message = "converged: no decreasing step found (mu too large)"
             break
-        decrease = (cost - cost_t) / max(cost, 1e-300)
+        decrease = ((cost - cost_t) / max(cost, 1e-300)
+                    if np.isfinite(cost) else 1.0)
         step = np.linalg.norm(trial - theta)
         theta, yhat, J, r, cost = trial, y_t, J_t, r_t, cost_t
         history.append(theta.copy())
@@ -110,6 +113,25 @@ def _lm(theta, o, u, y, max_iter, tol, m_min):
             break
     return dict(theta=theta, cost=cost, J=J, r=r, yhat=yhat, nit=it,
                 history=np.array(history), message=message)
+
+
+def _admissible_start(theta, o, m_min):
+    """Move a start into the domain: slopes >= m_min, D >= 0, and unstable
+    denominators pulled inside the unit circle (roots scaled by 0.9 until
+    stable)."""
+    theta = theta.copy()
+    na, nb, nc, nd = o[:4]
+    im = nc + na
+    theta[~np.isfinite(theta)] = 0.0
+    theta[im:im + 2] = np.maximum(theta[im:im + 2], max(m_min, 1e-3))
+    theta[im + 2:im + 4] = np.maximum(theta[im + 2:im + 4], 0.0)
+    for start, n in ((0, nc), (nc, na)):
+        powers = 0.9 ** np.arange(1, n + 1)
+        for _ in range(200):
+            if is_stable(theta, start, n, 1e-3):
+                break
+            theta[start:start + n] *= powers
+    return theta
 
 
 def _perturb(theta, o, rng, spread, m_min):
@@ -192,7 +214,7 @@ def refine(model, u, y, max_iter=100, tol=1e-10, n_starts=1, spread=0.3,
     m_min = check_positive('m_min', m_min)
     orders = model.orders
     o = tuple(orders[k] for k in ('na', 'nb', 'nc', 'nd', 'q1', 'q2'))
-    theta0 = model.theta
+    theta0 = _admissible_start(model.theta, o, m_min)
     p = theta0.size
     if u.size <= 2 * p:
         raise ValueError(f"u and y have {u.size} samples, too few for {p} "
@@ -203,9 +225,7 @@ def refine(model, u, y, max_iter=100, tol=1e-10, n_starts=1, spread=0.3,
     for i in range(n_starts):
         th = theta0.copy() if i == 0 else _perturb(theta0, o, rng, spread,
                                                    m_min)
-        if not _admissible(th, o, m_min):
-            th[o[2] + o[0]:o[2] + o[0] + 2] = np.maximum(
-                th[o[2] + o[0]:o[2] + o[0] + 2], m_min)
+        th = _admissible_start(th, o, m_min)
         out = _lm(th, o, u, y, max_iter, tol, m_min)
         if progress:
             print(f"refine start {i + 1}/{n_starts}: cost {out['cost']:.6g} "

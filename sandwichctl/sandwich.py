@@ -164,10 +164,11 @@ class SandwichSystem(ct.InterconnectedSystem):
     def normalized(self):
         """Equivalent system with b0 = d0 = 1 (Sections 2 and 5).
 
-        The gains are absorbed into the backlash: with x = b0 x' and
-        y = L2'[d0 v], the slopes become m |b0| |d0| and the thresholds
-        D / |b0|. If b0 < 0 the mirror symmetry
-        B_(m1,m2,D1,D2)(-x) = -B_(m2,m1,D2,D1)(x) swaps the two lines. From
+        The gains are absorbed into the backlash: with ``x = b0 x'`` and
+        ``y = L2'[d0 v]``, the slopes become ``m * abs(b0) * abs(d0)`` and
+        the thresholds ``D / abs(b0)``. If b0 < 0 the mirror symmetry
+        ``B(m1, m2, D1, D2)(-x) = -B(m2, m1, D2, D1)(x)`` swaps the two
+        lines. From
         zero initial state, the output is the same as the original's.
 
         Raises

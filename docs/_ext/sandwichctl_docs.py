@@ -27,9 +27,9 @@
 """
 
 import importlib
+import json
 import inspect
 import pkgutil
-import shutil
 import textwrap
 from pathlib import Path
 
@@ -78,7 +78,7 @@ def _relative_name(package, module, name):
     """
     obj = getattr(module, name)
     flat = getattr(package, name, None) is obj
-    if flat and (inspect.isclass(obj) or callable(obj)):
+    if flat and callable(obj):
         return name
     return f"{module.__name__[len(package.__name__) + 1:]}.{name}"
 
@@ -134,11 +134,18 @@ def write_api_pages(srcdir, package_name='sandwichctl'):
             logger.warning(
                 f"module {module.__name__} has no __all__, so the API "
                 f"reference cannot tell its public names; add __all__ "
-                f"(see STYLE.md)")
+                f"(one topic per module, public names in __all__)")
         modules.append((name, module))
+    # Remove pages of modules and names that are gone: an orphan page
+    # would fail the build ("document isn't included in any toctree").
     wanted = {'index.rst'} | {f"{name}.rst" for name, _ in modules}
     for stale in outdir.glob('*.rst'):
         if stale.name not in wanted:
+            stale.unlink()
+    stubs = {f"{package_name}.{_relative_name(package, module, n)}.rst"
+             for _, module in modules for n in getattr(module, '__all__', [])}
+    for stale in (outdir / 'generated').glob('*.rst'):
+        if stale.name not in stubs:
             stale.unlink()
     _write_if_changed(outdir / 'index.rst', _index_page(package, modules))
     for name, module in modules:
@@ -147,7 +154,11 @@ def write_api_pages(srcdir, package_name='sandwichctl'):
 
 
 def copy_notebooks(srcdir, notebook_dir):
-    """Mirror ``notebook_dir/*.ipynb`` into ``<srcdir>/notebooks``."""
+    """Mirror ``notebook_dir/*.ipynb`` into ``<srcdir>/notebooks``.
+
+    A copy whose metadata lacks ``language_info`` (e.g. stripped before
+    committing) gets the Python one, so that its code is highlighted.
+    """
     source = Path(notebook_dir)
     target = Path(srcdir) / 'notebooks'
     target.mkdir(exist_ok=True)
@@ -157,9 +168,13 @@ def copy_notebooks(srcdir, notebook_dir):
         if old.name not in found:
             old.unlink()
     for name, path in found.items():
-        dest = target / name
-        if not dest.exists() or dest.read_bytes() != path.read_bytes():
-            shutil.copy2(path, dest)
+        text = path.read_text(encoding='utf-8')
+        notebook = json.loads(text)
+        metadata = notebook.setdefault('metadata', {})
+        if 'language_info' not in metadata:
+            metadata['language_info'] = {'name': 'python'}
+            text = json.dumps(notebook, indent=1, ensure_ascii=False) + '\n'
+        _write_if_changed(target / name, text)
 
 
 def _docstring_section(doc, title):
