@@ -11,6 +11,7 @@ and designs inverse-backlash compensators.
 """
 
 from . import examples, study
+from . import xystudy
 from .backlash import *
 from .sandwich import *
 from .validation import *

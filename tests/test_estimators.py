@@ -1,0 +1,148 @@
+"""Tests of the library's estimators (issue 4): RPEM, refine, method='oe'."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import sandwichctl as sw
+from sandwichctl._predictor import is_stable
+
+
+def _data(n, seed, snr=None, plant=None, scale=1.0):
+    plant = plant or sw.examples.paper_plant()
+    u = scale * sw.examples.paper_input(n, seed=seed)
+    y = plant.simulate(u).outputs
+    if snr is not None:
+        y = sw.examples.add_noise(y, snr, seed=seed + 1000)
+    return plant, u, y
+
+
+def _in_domain(theta, o):
+    na, nb, nc, nd = o
+    im = nc + na
+    return (np.all(theta[im:im + 2] > 0) and np.all(theta[im + 2:im + 4] >= 0)
+            and is_stable(theta, 0, nc, 0.0) and is_stable(theta, nc, na, 0.0))
+
+
+def test_rpem_projection_keeps_every_estimate_in_the_domain():
+    plant, u, y = _data(3000, seed=1, snr=10)
+    res = sw.identify(u, y, **plant.orders, method='rpem', P0=1e3,
+                      max_step=5.0)
+    o = tuple(plant.orders[k] for k in ('na', 'nb', 'nc', 'nd'))
+    assert res.history.shape == (3000, 9)
+    assert all(_in_domain(th, o) for th in res.history)
+    assert res.counts['limited'] + res.counts['rejected'] > 0
+
+
+def test_rpem_recovers_from_divergence_instead_of_blowing_up():
+    # a start with a near-unstable L2, a huge initial covariance and an
+    # error limit the first predictions exceed: the safeguards must reset
+    # the model and P and carry on
+    plant, u, y = _data(3000, seed=2)
+    theta0 = np.array([-1.9, 0.95, 0, 0, 0.1, 0.1, 0.1, 0.1, 0])
+    res = sw.identify(u, y, **plant.orders, method='rpem', theta0=theta0,
+                      P0=1e4, p_max=1e5, err_limit=2 * np.std(y),
+                      warmup=3000)
+    assert res.success and np.all(np.isfinite(res.history))
+    assert res.counts['reset'] > 0
+    # after the resets the estimator still reduces the prediction error
+    e = res.errors
+    assert np.mean(e[-500:] ** 2) < 0.2 * np.mean(e[:500] ** 2)
+
+
+def test_rpem_series_parallel_converges_noise_free():
+    plant, u, y = _data(3000, seed=1)
+    res = sw.identify(u, y, **plant.orders, method='rpem', warmup=3000)
+    assert sw.parameter_error(res.theta, plant.theta) < 0.01
+
+
+def test_refine_recovers_and_reports_uncertainty():
+    plant, u, y = _data(3000, seed=3, snr=46.5)
+    start = sw.SandwichSystem.from_theta(plant.theta * 1.1, **plant.orders)
+    res = sw.refine(start, u, y)
+    assert res.success and res.method == 'refine'
+    err = sw.parameter_error(res.theta, plant.theta)
+    assert err < 0.02
+    # standard errors are positive and of the size of the actual error
+    assert np.all(res.std > 0) and np.all(res.std < 0.1)
+    assert np.all(np.abs(res.theta - plant.theta) < 6 * res.std)
+    # white noise at SNR 46.5 caps the fit at 100 (1 - 1/sqrt(1 + 46.5))
+    assert abs(res.fit - 100 * (1 - 1 / np.sqrt(47.5))) < 1.0
+    np.testing.assert_allclose(res.fit, sw.fit_percent(
+        y, res.model.simulate(u).outputs), rtol=1e-9)
+
+
+def test_refine_starts_from_an_unstable_model():
+    plant, u, y = _data(2000, seed=4)
+    bad = plant.theta.copy()
+    bad[:2] = [2.5, 1.6]                       # L2 poles outside the circle
+    start = sw.SandwichSystem.from_theta(bad, **plant.orders)
+    res = sw.refine(start, u, y, n_starts=3, seed=0)
+    assert res.success and np.isfinite(res.cost)
+    assert sw.parameter_error(res.theta, plant.theta) < 1e-6
+
+
+def test_multistart_never_worse_than_single_start():
+    plant, u, y = _data(2000, seed=5, snr=10)
+    start = sw.SandwichSystem.from_theta(
+        np.array([0.5, -0.2, 0.0, 0.0, 1.0, 1.0, 0.1, 0.1, 0.0]),
+        **plant.orders)
+    one = sw.refine(start, u, y)
+    many = sw.refine(start, u, y, n_starts=4, seed=1)
+    assert many.cost <= one.cost
+
+
+def test_oe_default_meets_the_noise_free_goal():
+    plant, u, y = _data(2000, seed=6)
+    res = sw.identify(u, y, **plant.orders)
+    assert res.method == 'oe' and res.success
+    assert sw.parameter_error(res.theta, plant.theta) < 1e-3
+    assert res.recursive.method == 'rpem'
+    assert res.history.shape[0] == 2000
+
+
+def test_refine_option_of_identify():
+    plant, u, y = _data(4000, seed=7)
+    res = sw.identify(u, y, **plant.orders, method='bundle', refine=True)
+    assert res.method == 'bundle+refine'
+    assert sw.parameter_error(res.theta, plant.theta) < 1e-3
+
+
+def test_small_input_that_does_not_excite_the_backlash_warns():
+    # |x| stays well inside the dead band of width D1 + D2
+    plant, u, y = _data(2000, seed=8, scale=0.01)
+    with pytest.warns(RuntimeWarning, match='hardly excite|poorly determined'):
+        sw.identify(u, y, **plant.orders, method='rpem', refine=True)
+
+
+def test_overparametrised_orders_warn():
+    plant, u, y = _data(1500, seed=9, snr=20)
+    with pytest.warns(RuntimeWarning, match='poorly determined'):
+        sw.identify(u, y, na=4, nb=2, nc=4, nd=3, method='rpem',
+                    warmup=1500, refine=True)
+
+
+@pytest.mark.parametrize('kwargs, exc, match', [
+    (dict(model='plant'), TypeError, 'model must be a SandwichSystem'),
+    (dict(y=np.zeros(10)), ValueError, 'same length'),
+    (dict(n_starts=0), ValueError, 'n_starts must be an integer >= 1'),
+    (dict(u=np.zeros(10), y=np.zeros(10)), ValueError, 'too few'),
+])
+def test_refine_bad_input(kwargs, exc, match):
+    plant = sw.examples.paper_plant()
+    args = dict(model=plant, u=np.sin(np.arange(500.0)),
+                y=np.cos(np.arange(500.0)))
+    args.update(kwargs)
+    with pytest.raises(exc, match=match):
+        sw.refine(**args)
+
+
+@pytest.mark.parametrize('kwargs, match', [
+    (dict(lam0=1.5), r'lam0 must be in \(0, 1\]'),
+    (dict(P0=-1), 'P0 must be a finite number > 0'),
+    (dict(warmup=-1), 'warmup must be an integer >= 0'),
+])
+def test_rpem_bad_options(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        sw.RecursiveIdentifier(2, 0, 2, 1, method='rpem', **kwargs)
