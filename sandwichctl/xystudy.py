@@ -226,9 +226,11 @@ def section6_table(run):
     for name in names:
         res, val = run['results'][name], run['validation'][name]
         mse = running_mse(_errors(res))
+        err, fit = ((f"{val['max_relative_error']:.2%}",
+                     f"{val['fit']:.2f}") if val['stable'] else ('inf', '-'))
         lines.append(
-            f"{name:<{width}}  {val['max_relative_error']:11.2%}  "
-            f"{val['fit']:8.2f}  {'yes' if val['stable'] else 'NO':>6}  "
+            f"{name:<{width}}  {err:>11}  {fit:>8}  "
+            f"{'yes' if val['stable'] else 'NO':>6}  "
             f"{mse[-1] if mse.size else np.nan:9.4g}  {res.elapsed:6.2f}")
     labels = next(iter(run['results'].values())).theta_labels
     lines += ['', f"{'param':>6} {'true':>9} "
