@@ -13,6 +13,7 @@ fit, then the medians over the seeds. 6700 samples is the length after
 which Section 6 reports convergence.
 
 Run: python benchmarks/bench_xy_stage.py [--seeds 5] [--samples 6700 20000]
+(1-3 minutes, most of it 'oe' on 20,000 samples).
 """
 
 import argparse

@@ -23,15 +23,18 @@ class QPError(RuntimeError):
     """piqp did not solve a quadratic program."""
 
 
-def _solve(P, c, A=None, b=None, x_l=None, x_u=None):
+def _solve(P, c, A=None, b=None, x_l=None, x_u=None, accept_max_iter=False):
     solver = piqp.DenseSolver()
     solver.settings.verbose = False
     solver.setup(P=P, c=c, A=A, b=b, G=None, h_l=None, h_u=None,
                  x_l=x_l, x_u=x_u)
     status = solver.solve()
-    if status != piqp.PIQP_SOLVED:
-        raise QPError(f"piqp returned status {status}")
-    return np.asarray(solver.result.x, dtype=float)
+    x = np.asarray(solver.result.x, dtype=float)
+    if status == piqp.PIQP_SOLVED or (
+            accept_max_iter and status == piqp.PIQP_MAX_ITER_REACHED
+            and np.all(np.isfinite(x))):
+        return x
+    raise QPError(f"piqp returned status {status}")
 
 
 def simplex_qp(P, c):
@@ -41,15 +44,20 @@ def simplex_qp(P, c):
     largest diagonal entry of P before the solve, which leaves the
     minimiser unchanged and keeps piqp's absolute tolerances meaningful
     when the subgradients are tiny. The result is clipped to >= 0 and
-    renormalised to sum to one (it is feasible to piqp's tolerance).
+    renormalised to sum to one (it is feasible to piqp's tolerance). If
+    piqp stops at its iteration limit (it can on nearly collinear bundles)
+    its last iterate, projected the same way, is used: any point of the
+    simplex gives a valid convex combination of subgradients.
     """
     n = c.size
     if n == 1:
         return np.ones(1)
     scale = max(float(np.max(np.diag(P))), float(np.max(np.abs(c))), 1e-300)
     lam = _solve(P / scale, c / scale, A=np.ones((1, n)), b=np.ones(1),
-                 x_l=np.zeros(n))
+                 x_l=np.zeros(n), accept_max_iter=True)
     lam = np.clip(lam, 0.0, None)
+    if not lam.sum() > 0:
+        raise QPError("piqp returned no point of the simplex")
     return lam / lam.sum()
 
 

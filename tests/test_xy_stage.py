@@ -1,7 +1,6 @@
 """The X-Y stage axis of Section 6 (examples.xy_stage*) and its study
 (sandwichctl.xystudy)."""
 
-
 import matplotlib
 import numpy as np
 import pytest
