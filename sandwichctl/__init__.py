@@ -14,6 +14,8 @@ from . import examples, study
 from . import xystudy
 from .backlash import *
 from .sandwich import *
+from .compensate import *
+from .descfcn import *
 from .validation import *
 from .plotting import *
 from .io import *

@@ -112,16 +112,16 @@ def backlash_response(x, m1, m2, D1, D2, x_prev=0.0, v_prev=0.0,
     return (v, zones) if return_zones else v
 
 
-def _backlash_update(t, state, inp, params):
-    v, _ = backlash_step(inp[0], state[0], state[1], params['m1'],
-                         params['m2'], params['D1'], params['D2'])
-    return np.array([inp[0], v])
+def _backlash_functions(m1, m2, D1, D2):
+    """Update and output functions of one backlash (parameters fixed)."""
+    def update(t, state, inp, params):
+        v, _ = backlash_step(inp[0], state[0], state[1], m1, m2, D1, D2)
+        return np.array([inp[0], v])
 
-
-def _backlash_output(t, state, inp, params):
-    v, _ = backlash_step(inp[0], state[0], state[1], params['m1'],
-                         params['m2'], params['D1'], params['D2'])
-    return np.array([v])
+    def output(t, state, inp, params):
+        v, _ = backlash_step(inp[0], state[0], state[1], m1, m2, D1, D2)
+        return np.array([v])
+    return update, output
 
 
 class Backlash(ct.NonlinearIOSystem):
@@ -171,26 +171,26 @@ class Backlash(ct.NonlinearIOSystem):
 
     def __init__(self, m1, m2, D1, D2, dt=True, name=None, inputs='x',
                  outputs='v', states=('x_prev', 'v_prev')):
-        params = {'m1': check_positive('m1', m1),
-                  'm2': check_positive('m2', m2),
-                  'D1': check_nonnegative('D1', D1),
-                  'D2': check_nonnegative('D2', D2)}
+        self._values = (check_positive('m1', m1), check_positive('m2', m2),
+                        check_nonnegative('D1', D1),
+                        check_nonnegative('D2', D2))
         if dt is None or dt is False or (dt is not True and not dt > 0):
             raise ValueError(
                 f"dt must be a positive sampling time or True (discrete, "
                 f"unspecified); got {dt!r}. The backlash of eq. (2.2) is a "
                 f"discrete-time map")
-        super().__init__(
-            _backlash_update, _backlash_output, inputs=inputs,
-            outputs=outputs, states=list(states), dt=dt, name=name,
-            params=params)
+        update, output = _backlash_functions(*self._values)
+        super().__init__(update, output, inputs=inputs, outputs=outputs,
+                         states=list(states), dt=dt, name=name)
 
-    # Read-only views of the parameters (they live in params so that
-    # ct.input_output_response(..., params=...) can override them).
-    m1 = property(lambda self: self.params['m1'], doc="Increase slope.")
-    m2 = property(lambda self: self.params['m2'], doc="Decrease slope.")
-    D1 = property(lambda self: self.params['D1'], doc="Increase threshold.")
-    D2 = property(lambda self: self.params['D2'], doc="Decrease threshold.")
+    # Read-only parameters. They are not python-control ``params``: an
+    # interconnection merges the params of all its blocks into one dict,
+    # so two backlashes (a plant and its model, say) would silently share
+    # one set of parameters.
+    m1 = property(lambda self: self._values[0], doc="Increase slope.")
+    m2 = property(lambda self: self._values[1], doc="Decrease slope.")
+    D1 = property(lambda self: self._values[2], doc="Increase threshold.")
+    D2 = property(lambda self: self._values[3], doc="Decrease threshold.")
 
     @property
     def crossing(self):
@@ -211,7 +211,7 @@ class Backlash(ct.NonlinearIOSystem):
 
     def copy_with(self, **changes):
         """Return a new Backlash with some of m1, m2, D1, D2 changed."""
-        values = {key: self.params[key] for key in ('m1', 'm2', 'D1', 'D2')}
+        values = dict(zip(('m1', 'm2', 'D1', 'D2'), self._values))
         unknown = set(changes) - set(values)
         if unknown:
             raise TypeError(f"unknown backlash parameter(s) {sorted(unknown)};"

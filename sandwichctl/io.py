@@ -86,7 +86,7 @@ def save_model(model, path, metadata=None):
     Parameters
     ----------
     model : SandwichSystem
-        The model to save. Its current backlash parameters (``params``)
+        The model to save. Its coefficients and backlash parameters
         are saved.
     path : str, os.PathLike or file object
         Where to write; an open text file is written to and left open.

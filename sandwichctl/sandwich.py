@@ -101,6 +101,7 @@ class SandwichSystem(ct.InterconnectedSystem):
         self._coef2 = _difference_coefficients(num2, den2)
         bl = Backlash(backlash.m1, backlash.m2, backlash.D1, backlash.D2,
                       dt=dt, name='backlash')
+        self._backlash_values = bl._values
         ss1 = ct.ss(L1, inputs='u', outputs='x', name='L1')
         ss2 = ct.ss(L2, inputs='v', outputs='y', name='L2')
         self._matrices = tuple(
@@ -127,9 +128,8 @@ class SandwichSystem(ct.InterconnectedSystem):
 
     @property
     def backlash(self):
-        """The backlash block (a sw.Backlash), using current params."""
-        p = self.params
-        return Backlash(p['m1'], p['m2'], p['D1'], p['D2'], dt=self.dt)
+        """The backlash block (a sw.Backlash)."""
+        return Backlash(*self._backlash_values, dt=self.dt)
 
     @property
     def coefficients(self):
@@ -140,10 +140,9 @@ class SandwichSystem(ct.InterconnectedSystem):
         """
         a, b, q1 = self._coef1
         c, d, q2 = self._coef2
-        p = self.params
+        m1, m2, D1, D2 = self._backlash_values
         return {'a': a.copy(), 'b': b.copy(), 'c': c.copy(), 'd': d.copy(),
-                'q1': q1, 'q2': q2, 'm1': p['m1'], 'm2': p['m2'],
-                'D1': p['D1'], 'D2': p['D2']}
+                'q1': q1, 'q2': q2, 'm1': m1, 'm2': m2, 'D1': D1, 'D2': D2}
 
     @property
     def orders(self):
@@ -327,9 +326,8 @@ class SandwichSystem(ct.InterconnectedSystem):
         y = np.empty(n)
         x, v = (np.empty(n), np.empty(n)) if internal else (y[:0], y[:0])
         states = np.empty((n if return_states else 0, self.nstates))
-        p = self.params
-        simulate_kernel(u, *self._matrices, p['m1'], p['m2'], p['D1'],
-                        p['D2'], state, y, x, v, states)
+        simulate_kernel(u, *self._matrices, *self._backlash_values, state, y,
+                        x, v, states)
         if timepts is None:
             step = 1.0 if self.dt is True else float(self.dt)
             timepts = step * np.arange(n)

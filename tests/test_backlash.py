@@ -76,7 +76,7 @@ def test_band_invariant_and_clamp_form_where_lines_do_not_cross(
                                rtol=1e-12, atol=1e-12)
 
 
-def test_io_system_matches_pure_function_and_params_override(rng):
+def test_io_system_matches_pure_function(rng):
     x = rng.normal(0, 1, 200)
     bl = sw.Backlash(1.3, 0.8, 0.2, 0.4, dt=0.5, name='bl')
     assert bl.nstates == 2 and bl.dt == 0.5
@@ -84,12 +84,20 @@ def test_io_system_matches_pure_function_and_params_override(rng):
                                     initial_state=[0.1, 0.05])
     np.testing.assert_allclose(
         resp.outputs, bl.response(x, x_prev=0.1, v_prev=0.05), atol=1e-15)
-    # params given to python-control override the defaults
-    resp = ct.input_output_response(bl, 0.5 * np.arange(x.size), x,
-                                    params={'m1': 2.0})
-    np.testing.assert_allclose(
-        resp.outputs, sw.backlash_response(x, 2.0, 0.8, 0.2, 0.4),
-        atol=1e-15)
+
+
+def test_two_backlashes_in_one_interconnect_keep_their_parameters(rng):
+    # python-control merges the params of interconnected blocks; the
+    # backlash parameters must not be shared through them
+    x = rng.normal(0, 1, 100)
+    a = sw.Backlash(1.0, 1.0, 0.1, 0.1, dt=1, name='a', inputs='x',
+                    outputs='va')
+    b = sw.Backlash(2.0, 3.0, 0.5, 0.2, dt=1, name='b', inputs='x',
+                    outputs='vb')
+    both = ct.interconnect([a, b], inplist=['x'], outlist=['va', 'vb'])
+    resp = ct.input_output_response(both, np.arange(x.size), x)
+    np.testing.assert_allclose(resp.outputs[0], a.response(x), atol=1e-15)
+    np.testing.assert_allclose(resp.outputs[1], b.response(x), atol=1e-15)
 
 
 def test_output_function_is_pure():
