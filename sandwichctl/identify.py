@@ -44,6 +44,10 @@ _KIND_NAMES = {LONG: 'long', SHORT: 'short', NULL: 'null', STOP: 'stop',
                SKIP: 'skip', RPEM_LIMITED: 'limited',
                RPEM_REJECTED: 'rejected', RPEM_RESET: 'reset', RPEM_OK: 'ok'}
 
+_KINDS_OF = {'bundle': ('long', 'short', 'null', 'stop'),
+             'gradient': ('long', 'skip'),
+             'rpem': ('ok', 'limited', 'rejected', 'reset')}
+
 #: Default options of each recursive method (paper symbols where defined).
 DEFAULTS = {
     'bundle': dict(eta0=0.015, k1=6, delta=1e-4, q=0.1, q_star=0.5,
@@ -444,7 +448,9 @@ class RecursiveIdentifier:
         return IdentificationResult(
             model=self.model, theta=self.theta, history=hist,
             errors=np.array(self._err), kinds=np.array(self._kind, int),
-            counts=dict(self.counts), success=success, message=message,
+            counts={k: v for k, v in self.counts.items()
+                    if k in _KINDS_OF[self.method]},
+            success=success, message=message,
             method=self.method, options=dict(self.options),
             orders=dict(self.orders), theta_labels=list(self.labels),
             theta0=self.theta0.copy(), nit=self.n_samples, elapsed=elapsed)
