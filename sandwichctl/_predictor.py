@@ -68,6 +68,26 @@ def l1_output(theta, o, u, xs, t):
     return x
 
 
+@numba.njit(cache=True, inline='always')
+def add_direct_partials(out, scale, zone, x, m1, m2, D1, D2, im):
+    """Add scale * (direct derivative of v(k) w.r.t. m1, m2, D1, D2).
+
+    Eq. (3.3): v = m1 (x - D1) in the increase zone gives (x - D1, -m1)
+    for (m1, D1); v = m2 (x + D2) in the decrease zone gives (x + D2, m2)
+    for (m2, D2); the memory zone has none. Returns the slope of the
+    active line (0 in the memory zone), by which dx/dtheta enters dv.
+    """
+    if zone == 1:
+        out[im] += scale * (x - D1)
+        out[im + 2] -= scale * m1
+        return m1
+    if zone == -1:
+        out[im + 1] += scale * (x + D2)
+        out[im + 3] += scale * m2
+        return m2
+    return 0.0
+
+
 @numba.njit(cache=True)
 def window_predict(theta, o, u, ystar, xs, vs, zs, k, grad):
     """y_hat(k, theta) of the paper's recursive predictor; see module doc.
@@ -95,15 +115,9 @@ def window_predict(theta, o, u, ystar, xs, vs, zs, k, grad):
             grad[idd + j - 1] = vt
         if zone != zs[t - 1]:
             nonsmooth = True
+        m = add_direct_partials(grad, dj, zone, xt, m1, m2, D1, D2, im)
         if zone == 0:
             continue                    # memory zone: (3.3) gives 0
-        m = m1 if zone == 1 else m2
-        if zone == 1:
-            grad[im] += dj * (xt - D1)
-            grad[im + 2] -= dj * m1
-        else:
-            grad[im + 1] += dj * (xt + D2)
-            grad[im + 3] += dj * m2
         for i in range(1, na + 1):
             grad[ia + i - 1] -= dj * m * xs[t - i]
         for jj in range(1, nb + 1):
@@ -170,12 +184,7 @@ def oe_step(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k, ymeas=None):
         m = m1 if zone == 1 else m2
         for r in range(p):
             Sv[k, r] = m * Sx[k, r]
-        if zone == 1:
-            Sv[k, im] += x - D1
-            Sv[k, im + 2] -= m1
-        else:
-            Sv[k, im + 1] += x + D2
-            Sv[k, im + 3] += m2
+        add_direct_partials(Sv[k], 1.0, zone, x, m1, m2, D1, D2, im)
     # L2, eq. (2.1)
     parallel = ymeas is None
     past = ys if parallel else ymeas

@@ -187,7 +187,7 @@ RPEM_OK, RPEM_LIMITED, RPEM_REJECTED, RPEM_RESET = 8, 5, 6, 7
 
 
 @numba.njit(cache=True)
-def _admissible(theta, o):
+def stable_and_finite(theta, o):
     """Both denominators stable (|poles| < 0.999) and finite."""
     for r in range(theta.size):
         if not np.isfinite(theta[r]):
@@ -265,7 +265,7 @@ def rpem_run(theta, P, o, u, y, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1,
             for r in range(p):
                 trial[r] = theta[r] + dtheta[r]
             project(trial, o, m_min)
-            if _admissible(trial, o):
+            if stable_and_finite(trial, o):
                 accepted = True
                 break
             for r in range(p):

@@ -234,12 +234,13 @@ class RecursiveIdentifier:
         self.counts = {name: 0 for name in _KIND_NAMES.values()}
         self.diverged_at = None
         self._hist, self._err, self._kind = [], [], []
+        # per-chunk outputs of the compiled recursions (gradient, rpem)
+        self._buf = (np.zeros((cap, p)), np.zeros(cap),
+                     np.zeros(cap, dtype=np.int64))
         if method == 'rpem':
             self._S = [np.zeros((cap, p)) for _ in range(3)]
             self._P = self.options['P0'] * np.eye(p)
             self._lam = np.array([self.options['lam_start']])
-            self._rbuf = (np.zeros((cap, p)), np.zeros(cap),
-                          np.zeros(cap, dtype=np.int64))
             self._rwork = [np.zeros(p) for _ in range(4)]
         if method == 'bundle':
             k1 = self.options['k1']
@@ -311,7 +312,7 @@ class RecursiveIdentifier:
             arr[:pad] = arr[self._pos - pad:self._pos]
         self._pos = pad
 
-    def _diverged(self, theta, k_abs):
+    def _diverged(self, theta):
         return (not np.all(np.isfinite(theta))
                 or np.max(np.abs(theta)) > self.options['divergence_limit'])
 
@@ -340,7 +341,7 @@ class RecursiveIdentifier:
 
     def _run_rpem(self, k0, k1, errors):
         opt = self.options
-        hist, err, kinds = self._rbuf
+        hist, err, kinds = self._buf
         theta = self._theta.copy()
         rpem_run(theta, self._P, self._o, self._u, self._y, self._xs,
                  self._vs, self._zs, self._ys, *self._S, k0, k1,
@@ -355,11 +356,7 @@ class RecursiveIdentifier:
 
     def _run_gradient(self, k0, k1, errors):
         opt = self.options
-        if not hasattr(self, '_gbuf'):
-            cap = self._u.size
-            self._gbuf = (np.zeros((cap, self._theta.size)), np.zeros(cap),
-                          np.zeros(cap, dtype=np.int64))
-        hist, err, kinds = self._gbuf
+        hist, err, kinds = self._buf
         theta = self._theta.copy()
         bad = gradient_run(
             theta, self._o, self._u, self._y,
@@ -413,7 +410,7 @@ class RecursiveIdentifier:
                 opt['eta_max'], opt['rho'], opt['n_ls'], opt['q'],
                 opt['q_star'], opt['gamma'], opt['delta'], opt['step_bound'],
                 opt['m_min'], theta_new, trial, t, grad)
-            if self._diverged(theta_new, k):
+            if self._diverged(theta_new):
                 self._flag_divergence(self.n_samples + k - k0)
                 return k - k0
             if kind != STOP and cap:

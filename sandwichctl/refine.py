@@ -40,6 +40,7 @@ import warnings
 import numpy as np
 
 from ._predictor import simulate_with_sensitivities, is_stable
+from ._recursive import stable_and_finite
 from ._qp import box_qp, QPError
 from .sandwich import SandwichSystem
 from ._validation import check_signal, check_int, check_positive
@@ -48,13 +49,12 @@ __all__ = ['refine']
 
 
 def _admissible(theta, o, m_min):
-    na, nb, nc, nd = o[:4]
-    im = nc + na
-    return (np.all(np.isfinite(theta))
+    """Finite, stable (see `_recursive.stable_and_finite`), m >= m_min,
+    D >= 0."""
+    im = o[2] + o[0]
+    return (stable_and_finite(theta, o)
             and np.all(theta[im:im + 2] >= m_min)
-            and np.all(theta[im + 2:im + 4] >= 0)
-            and is_stable(theta, nc, na, 1e-3)
-            and is_stable(theta, 0, nc, 1e-3))
+            and np.all(theta[im + 2:im + 4] >= 0))
 
 
 def _lm(theta, o, u, y, max_iter, tol, m_min):
