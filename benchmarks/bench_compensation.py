@@ -43,7 +43,7 @@ def _identified_model(plant, seed):
 
 
 #: Compensator options that stop the input chattering caused by a slightly
-#: over-estimated band (see sandwichctl.compensate, "Chattering").
+#: over-estimated band (see sandwichctl.design.closedloop, "Chattering in closed loop").
 ROBUST = dict(band_fraction=0.95, smoothing=0.02)
 
 

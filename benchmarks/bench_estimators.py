@@ -48,9 +48,9 @@ def main():
     methods = {'oe (default)': dict(method='oe'),
                'rpem': dict(method='rpem', warmup=500, lam0=0.995),
                'bundle (paper)': dict(method='bundle',
-                                      **sw.study.PAPER_SETTINGS['bundle']),
+                                      **sw.paper.section5.PAPER_SETTINGS['bundle']),
                'gradient (paper)': dict(method='gradient',
-                                        **sw.study.PAPER_SETTINGS['gradient']),
+                                        **sw.paper.section5.PAPER_SETTINGS['gradient']),
                'refine from truth*': None}
     rows = []
     for sname, plant in structures().items():

@@ -38,10 +38,10 @@ def main():
     ap.add_argument('--samples', type=int, default=20000)
     args = ap.parse_args()
     methods = {
-        'bundle': ('bundle', sw.study.PAPER_SETTINGS['bundle']),
-        'gradient': ('gradient', sw.study.PAPER_SETTINGS['gradient']),
+        'bundle': ('bundle', sw.paper.section5.PAPER_SETTINGS['bundle']),
+        'gradient': ('gradient', sw.paper.section5.PAPER_SETTINGS['gradient']),
         'gradient, no skip': ('gradient', dict(
-            sw.study.PAPER_SETTINGS['gradient'], skip_nonsmooth=False)),
+            sw.paper.section5.PAPER_SETTINGS['gradient'], skip_nonsmooth=False)),
     }
     rows = []
     for case, snr in (('noise-free', None), ('SNR 46.5', 46.5)):
@@ -51,7 +51,7 @@ def main():
             import warnings
             with warnings.catch_warnings():
                 warnings.simplefilter('ignore', RuntimeWarning)
-                run = sw.study.section5_run(args.samples, seed=seed, snr=snr,
+                run = sw.paper.section5.section5_run(args.samples, seed=seed, snr=snr,
                                             methods=methods)
             for m, res in run['results'].items():
                 err = res.parameter_error(run['theta_true'])

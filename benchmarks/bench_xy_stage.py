@@ -45,9 +45,9 @@ def main():
     rows = []
     for n in args.samples:
         per = {label: {'err': [], 'fit': [], 'time': []}
-               for label in sw.xystudy.METHODS}
+               for label in sw.paper.section6.METHODS}
         for seed in seeds:
-            run = sw.xystudy.section6_run(n_samples=n,
+            run = sw.paper.section6.section6_run(n_samples=n,
                                           n_validation=args.validation,
                                           seed=seed)
             for label, val in run['validation'].items():

@@ -6,20 +6,31 @@ simulates them fast, identifies them from data with the nonsmooth
 recursive method of the paper in ``shared/paper`` (and better estimators),
 and designs inverse-backlash compensators.
 
+The package is organised in rooms, each a subpackage; every public name
+is also available here (``sw.identify``, ``sw.SandwichSystem``, ...):
+
+- `model`: the backlash, the sandwich system and its simulation;
+- `identification`: recursive (paper) and batch identifiers, results;
+- `design`: inverses, compensator, closed loop, describing function;
+- `tools`: validation, plotting, model files;
+- `paper`: the paper's example plants and its Section 5 and 6 studies
+  (``sw.paper.section5``, ...); ``sw.examples`` is `paper.examples`.
+
+Dependencies run one way: `paper` uses `identification`, `design` and
+`tools`, which use `model`.
+
 >>> import control as ct
 >>> import sandwichctl as sw
 """
 
-from . import examples, study
-from . import xystudy
-from .backlash import *
-from .sandwich import *
-from .compensate import *
-from .descfcn import *
-from .validation import *
-from .plotting import *
-from .io import *
-from .identify import *
-from .refine import *
+from . import model, tools, identification, design, paper
+from .model import *
+from .tools import *
+from .identification import *
+from .design import *
+from .paper import examples
 
 __version__ = '0.1.0'
+
+__all__ = (model.__all__ + tools.__all__ + identification.__all__
+           + design.__all__ + ['examples', 'paper'])

@@ -13,7 +13,7 @@ import sys
 def _demo(args):
     import matplotlib
     matplotlib.use('Agg')
-    from . import study
+    from .paper import section5
 
     os.makedirs(args.out, exist_ok=True)
     print("Reproducing Section 5 of the paper: the sandwich plant (5.1)-(5.2)"
@@ -24,13 +24,13 @@ def _demo(args):
               'fig3_noisy.png')]
     for title, snr, fname in cases:
         print(f"\n== {title} ==", flush=True)
-        run = study.section5_run(args.samples, seed=args.seed, snr=snr,
+        run = section5.section5_run(args.samples, seed=args.seed, snr=snr,
                                  progress=True)
-        print(study.section5_table(run))
+        print(section5.section5_table(run))
         for label, res in run['results'].items():
             print(f"{label}: {res.message}; steps {res.counts}; "
                   f"{res.elapsed / res.nit * 1e6:.1f} us/sample")
-        fig = study.plot_section5(
+        fig = section5.plot_section5(
             run, title=f"Section 5, {title}: parameter estimates "
                        f"(dashed: equivalent true values)")
         path = os.path.join(args.out, fname)

@@ -6,7 +6,7 @@ import control as ct
 import pytest
 
 import sandwichctl as sw
-from sandwichctl.backlash import backlash_step
+from sandwichctl.model.backlash import backlash_step
 
 NORMALISED = (3.0, 3.6, 1 / 3, 0.4)        # the paper's plant, b0 = d0 = 1
 

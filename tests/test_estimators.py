@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import sandwichctl as sw
-from sandwichctl._predictor import is_stable
+from sandwichctl.identification._predictor import is_stable
 
 
 def _data(n, seed, snr=None, plant=None, scale=1.0):

@@ -7,9 +7,9 @@ import pytest
 from scipy.optimize import minimize
 
 import sandwichctl as sw
-from sandwichctl import _predictor as pr
-from sandwichctl import _recursive as rc
-from sandwichctl._qp import simplex_qp
+from sandwichctl.identification import _predictor as pr
+from sandwichctl.identification import _recursive as rc
+from sandwichctl.identification._qp import simplex_qp
 
 ORDERS = (2, 1, 2, 1, 1, 1)     # na, nb, nc, nd, q1, q2
 

@@ -1,13 +1,13 @@
 """The X-Y stage axis of Section 6 (examples.xy_stage*) and its study
-(sandwichctl.xystudy)."""
+(sandwichctl.paper.section6)."""
 
 import matplotlib
 import numpy as np
 import pytest
 
 import sandwichctl as sw
-from sandwichctl import examples, xystudy
-from sandwichctl.backlash import INCREASE, DECREASE
+from sandwichctl.paper import examples, section6
+from sandwichctl.model.backlash import INCREASE, DECREASE
 
 DT = 0.0005
 
@@ -20,7 +20,7 @@ def plant():
 @pytest.fixture(scope='module')
 def short_run():
     """Both methods on a short record (2500 samples), fixed seed."""
-    return xystudy.section6_run(n_samples=2500, n_validation=2000, seed=3)
+    return section6.section6_run(n_samples=2500, n_validation=2000, seed=3)
 
 
 # ---------------------------------------------------------------- plant
@@ -177,7 +177,7 @@ def test_measurement_quantisation_bound_and_noise():
 
 # ---------------------------------------------------------------- study
 def test_running_mse_closed_form():
-    np.testing.assert_allclose(xystudy.running_mse([2.0, 0.0, -1.0, 1.0]),
+    np.testing.assert_allclose(section6.running_mse([2.0, 0.0, -1.0, 1.0]),
                                [4.0, 2.0, 5 / 3, 1.5])
 
 
@@ -186,7 +186,7 @@ def test_validate_flags_unstable_model(plant):
     y = plant.simulate(u).outputs
     bad = sw.SandwichSystem.from_theta(
         [-2.1, 1.2, 0, 0, 1, 1, 0.1, 0.1, 0], **plant.orders, dt=DT)
-    out = xystudy.validate(bad, u, y)
+    out = section6.validate(bad, u, y)
     assert out['stable'] is False and out['yhat'] is None
     assert out['max_relative_error'] == np.inf
 
@@ -214,7 +214,7 @@ def test_bundle_with_section6_settings_reduces_prediction_error(short_run):
     # is y = v, barely scaled: fit far below 0)
     start = sw.SandwichSystem.from_theta(examples.XY_STAGE_THETA0,
                                          **short_run['plant'].orders, dt=DT)
-    fit0 = xystudy.validate(start, short_run['u_val'],
+    fit0 = section6.validate(start, short_run['u_val'],
                             short_run['y_val'])['fit']
     assert short_run['validation']['bundle']['fit'] > fit0 + 50
 
@@ -229,14 +229,14 @@ def test_fresh_validation_data_differ_from_identification(short_run):
 def test_table_and_figures(short_run):
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
-    text = xystudy.section6_table(short_run)
+    text = section6.section6_table(short_run)
     assert 'bundle' in text and 'oe' in text and 'max rel err' in text
     assert f"{short_run['validation']['oe']['max_relative_error']:.2%}" \
         in text
-    figs = xystudy.plot_section6(short_run)
+    figs = section6.plot_section6(short_run)
     assert set(figs) == {'fig5', 'fig6', 'fig7'}
     assert len([ax for ax in figs['fig5'].axes if ax.get_visible()]) == 9
     assert len(figs['fig7'].axes) == 2
     with pytest.raises(ValueError, match="not methods of this run"):
-        xystudy.plot_mse(short_run, labels='gradient')
+        section6.plot_mse(short_run, labels='gradient')
     plt.close('all')

@@ -1,11 +1,12 @@
 """Sphinx helpers for the sandwichctl documentation (local extension).
 
 1. **API pages.** At start-up, `write_api_pages` writes ``api/index.rst``
-   and one ``api/<module>.rst`` per public module of sandwichctl (every
-   ``sandwichctl/<name>.py`` whose name does not start with ``_``). Each
-   module page shows the module docstring and an autosummary table of the
-   names in the module's ``__all__``, so a new public module or name
-   appears in the docs without editing them. The files are generated
+   and one ``api/<room>.<module>.rst`` per public module of sandwichctl
+   (every ``sandwichctl/<room>/<name>.py`` whose names do not start with
+   ``_``), grouped on the index by room (subpackage). Each module page
+   shows the module docstring and an autosummary table of the names in
+   the module's ``__all__``, so a new public module or name appears in
+   the docs without editing them. The files are generated
    (``docs/api/`` is git-ignored) and are only rewritten when their text
    changes.
 
@@ -39,10 +40,9 @@ from sphinx.util.docutils import SphinxDirective
 
 logger = logging.getLogger(__name__)
 
-#: Topic order of the API reference; modules not listed follow
-#: alphabetically, so a new module needs no change here.
-MODULE_ORDER = ['sandwich', 'backlash', 'identify', 'validation',
-                'plotting', 'io', 'examples']
+#: Order of the rooms (subpackages) in the API reference; rooms not
+#: listed follow alphabetically, so a new room needs no change here.
+ROOM_ORDER = ['model', 'identification', 'design', 'tools', 'data', 'paper']
 
 API_INTRO = """\
 API reference
@@ -53,20 +53,34 @@ sandwichctl is used next to python-control::
     import control as ct
     import sandwichctl as sw
 
-Every public name is importable from the top level (``sw.SandwichSystem``,
-``sw.compare``, ...) except the contents of the ``examples`` module, which
-stay in their namespace (``sw.examples.paper_plant()``). The pages below
+The package is organised in rooms (subpackages), one concept each; see
+:doc:`../architecture`. Every public name of the toolbox is importable
+from the top level (``sw.SandwichSystem``, ``sw.compare``, ...); the
+paper's studies and example plants stay in their namespace
+(``sw.paper.section5``, ``sw.examples.paper_plant()``). The pages below
 follow the modules, one topic each; this page is generated from the
 modules' ``__all__``.
 """
 
 
+def public_rooms(package):
+    """(room, [dotted module names]) of `package`, in `ROOM_ORDER`."""
+    rooms = [info.name for info in pkgutil.iter_modules(package.__path__)
+             if info.ispkg and not info.name.startswith('_')]
+    rooms = ([r for r in ROOM_ORDER if r in rooms]
+             + sorted(set(rooms) - set(ROOM_ORDER)))
+    out = []
+    for room in rooms:
+        sub = importlib.import_module(f"{package.__name__}.{room}")
+        names = sorted(info.name for info in pkgutil.iter_modules(sub.__path__)
+                       if not info.name.startswith('_') and not info.ispkg)
+        out.append((room, [f"{room}.{n}" for n in names]))
+    return out
+
+
 def public_modules(package):
-    """The public submodules of `package`, in `MODULE_ORDER`."""
-    names = [info.name for info in pkgutil.iter_modules(package.__path__)
-             if not info.name.startswith('_')]
-    known = [n for n in MODULE_ORDER if n in names]
-    return known + sorted(set(names) - set(known))
+    """The dotted names of the public modules of `package`, room by room."""
+    return [name for _, names in public_rooms(package) for name in names]
 
 
 def _relative_name(package, module, name):
@@ -105,9 +119,15 @@ def _module_page(package, module):
 
 
 def _index_page(package, modules):
-    lines = [API_INTRO, 'Modules', '-------', '', '.. toctree::',
-             '   :maxdepth: 1', '']
-    lines += [f"   {name}" for name, _ in modules]
+    lines = [API_INTRO]
+    for room, names in public_rooms(package):
+        sub = importlib.import_module(f"{package.__name__}.{room}")
+        summary = (inspect.getdoc(sub) or room).split('\n\n')[0].replace('\n', ' ')
+        title = f"``{room}``: {summary}"
+        lines += [title, '-' * len(title), '', '.. toctree::',
+                  '   :maxdepth: 1', '']
+        lines += [f"   {name}" for name in names]
+        lines.append('')
     lines += ['', 'All public names', '----------------', '',
               f".. currentmodule:: {package.__name__}", '',
               '.. autosummary::', '']

@@ -28,7 +28,7 @@ import control as ct
 
 from .backlash import Backlash
 from ._kernel import simulate_kernel
-from ._validation import (check_discrete_siso_tf, check_int, check_signal,
+from .._checks import (check_discrete_siso_tf, check_int, check_signal,
                           check_vector, common_dt)
 
 __all__ = ['SandwichSystem', 'theta_labels']

@@ -12,7 +12,8 @@ and null steps, and stores the new estimate's internal signals.
 import numba
 import numpy as np
 
-from ._predictor import window_predict, store_state, oe_step, is_stable, _idx
+from ._predictor import (window_predict, store_state, oe_step,
+                         stable_and_finite, _idx)
 
 __all__ = []
 
@@ -184,16 +185,6 @@ def gradient_run(theta, o, u, y, series_parallel, xs, vs, zs, ys, k0, k1,
 
 
 RPEM_OK, RPEM_LIMITED, RPEM_REJECTED, RPEM_RESET = 8, 5, 6, 7
-
-
-@numba.njit(cache=True)
-def stable_and_finite(theta, o):
-    """Both denominators stable (|poles| < 0.999) and finite."""
-    for r in range(theta.size):
-        if not np.isfinite(theta[r]):
-            return False
-    na, nc = o[0], o[2]
-    return is_stable(theta, nc, na, 1e-3) and is_stable(theta, 0, nc, 1e-3)
 
 
 @numba.njit(cache=True)

@@ -70,6 +70,9 @@ import re
 
 import numpy as np
 
+from ..model.backlash import Backlash
+from ..model.sandwich import SandwichSystem
+
 __all__ = ['save_model', 'load_model', 'FORMAT_VERSION']
 
 #: Version of the JSON model format written by `save_model`.
@@ -185,7 +188,6 @@ def load_model(path, return_metadata=False):
 
 
 def _to_dict(model, metadata):
-    from .sandwich import SandwichSystem
 
     if not isinstance(model, SandwichSystem):
         raise TypeError(f"model must be a sandwichctl.SandwichSystem; got "
@@ -221,8 +223,6 @@ def _to_dict(model, metadata):
 
 
 def _from_dict(data, where):
-    from .backlash import Backlash
-    from .sandwich import SandwichSystem
 
     if not isinstance(data, dict) or data.get('format') != _FORMAT_TAG:
         found = (data.get('format') if isinstance(data, dict)

@@ -10,8 +10,8 @@ its speed measurement.
 import numpy as np
 import control as ct
 
-from .sandwich import SandwichSystem
-from ._validation import (check_int, check_positive, check_nonnegative,
+from ..model.sandwich import SandwichSystem
+from .._checks import (check_int, check_positive, check_nonnegative,
                           check_finite, check_signal)
 
 __all__ = ['paper_plant', 'paper_input', 'add_noise', 'PAPER_THETA0']

@@ -39,17 +39,18 @@ import warnings
 
 import numpy as np
 
-from ._predictor import simulate_with_sensitivities, is_stable
-from ._recursive import stable_and_finite
+from ._predictor import (simulate_with_sensitivities, is_stable,
+                         stable_and_finite)
 from ._qp import box_qp, QPError
-from .sandwich import SandwichSystem
-from ._validation import check_signal, check_int, check_positive
+from .result import IdentificationResult
+from ..model.sandwich import SandwichSystem
+from .._checks import check_signal, check_int, check_positive
 
 __all__ = ['refine']
 
 
 def _admissible(theta, o, m_min):
-    """Finite, stable (see `_recursive.stable_and_finite`), m >= m_min,
+    """Finite, stable (see `_predictor.stable_and_finite`), m >= m_min,
     D >= 0."""
     im = o[2] + o[0]
     return (stable_and_finite(theta, o)
@@ -198,7 +199,6 @@ def refine(model, u, y, max_iter=100, tol=1e-10, n_starts=1, spread=0.3,
     >>> bool(sw.parameter_error(res.theta, plant.theta) < 1e-6)
     True
     """
-    from .identify import IdentificationResult
     if not isinstance(model, SandwichSystem):
         raise TypeError(f"model must be a SandwichSystem; got "
                         f"{type(model).__name__}")

@@ -55,9 +55,10 @@ import numpy as np
 import control as ct
 from scipy.optimize import brentq
 
-from .backlash import Backlash
-from .sandwich import SandwichSystem
-from ._validation import (check_finite, check_nonnegative, check_positive,
+from ..model.backlash import Backlash
+from ..model.sandwich import SandwichSystem
+from .closedloop import TrackingController, closed_loop_response
+from .._checks import (check_finite, check_nonnegative, check_positive,
                           check_signal)
 
 __all__ = ['BacklashNonlinearity', 'backlash_nonlinearity',
@@ -525,7 +526,6 @@ def simulate_limit_cycle(plant, C, n=8000, kick=1.0, settle=None):
     response : control.TimeResponseData
         The simulation (`closed_loop_response`).
     """
-    from .compensate import TrackingController, closed_loop_response
     n = int(n)
     settle = n // 2 if settle is None else int(settle)
     r = np.zeros(n)

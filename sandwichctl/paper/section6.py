@@ -32,8 +32,8 @@ import warnings
 import numpy as np
 
 from . import examples
-from .identify import identify
-from .validation import compare
+from ..identification import identify
+from ..tools.validation import compare
 
 __all__ = ['section6_run', 'section6_table', 'validate', 'running_mse',
            'plot_section6', 'plot_parameters', 'plot_mse', 'plot_validation',
@@ -67,7 +67,7 @@ def running_mse(errors):
     Examples
     --------
     >>> import sandwichctl as sw
-    >>> sw.xystudy.running_mse([1.0, -3.0, 2.0])
+    >>> sw.paper.section6.running_mse([1.0, -3.0, 2.0])
     array([1.    , 5.    , 4.6667])
     """
     e = np.asarray(errors, dtype=float)
@@ -106,7 +106,7 @@ def validate(model, u, y):
     >>> plant = sw.examples.xy_stage()
     >>> u = sw.examples.xy_stage_input(2000, seed=1)
     >>> y = plant.simulate(u).outputs
-    >>> out = sw.xystudy.validate(plant, u, y)
+    >>> out = sw.paper.section6.validate(plant, u, y)
     >>> out['stable'], out['max_relative_error'], out['fit']
     (True, 0.0, 100.0)
     """
@@ -159,9 +159,9 @@ def section6_run(n_samples=6700, n_validation=4000, seed=0, methods=None,
     Examples
     --------
     >>> import sandwichctl as sw
-    >>> run = sw.xystudy.section6_run(
+    >>> run = sw.paper.section6.section6_run(
     ...     n_samples=2000, n_validation=1000,
-    ...     methods={'bundle': ('bundle', sw.xystudy.PAPER_SETTINGS)})
+    ...     methods={'bundle': ('bundle', sw.paper.section6.PAPER_SETTINGS)})
     >>> run['results']['bundle'].history.shape
     (2000, 9)
     >>> sorted(run['validation']['bundle'])

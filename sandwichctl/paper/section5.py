@@ -9,7 +9,7 @@ into the paper's table and Figs. 2 and 3. The command
 import numpy as np
 
 from . import examples
-from .identify import identify
+from ..identification import identify
 
 __all__ = ['section5_run', 'section5_table', 'plot_section5',
            'PAPER_SETTINGS']

@@ -34,7 +34,7 @@ Clarke subgradient (Definition 3.1).
 import numba
 import numpy as np
 
-from .backlash import backlash_step
+from ..model.backlash import backlash_step
 
 __all__ = []
 
@@ -236,6 +236,16 @@ def is_stable(theta, start, n, margin):
         for j in range(m + 1):
             a[j] = b[j]
     return True
+
+
+@numba.njit(cache=True)
+def stable_and_finite(theta, o):
+    """Both denominators stable (|poles| < 0.999) and finite."""
+    for r in range(theta.size):
+        if not np.isfinite(theta[r]):
+            return False
+    na, nc = o[0], o[2]
+    return is_stable(theta, nc, na, 1e-3) and is_stable(theta, 0, nc, 1e-3)
 
 
 @numba.njit(cache=True)

@@ -27,7 +27,8 @@ import numbers
 import numpy as np
 import control as ct
 
-from ._validation import check_signal
+from ..model.sandwich import SandwichSystem
+from .._checks import check_signal
 
 __all__ = ['fit_percent', 'nrmse', 'max_relative_error', 'compare',
            'CompareResult', 'CompareResultList']
@@ -413,7 +414,6 @@ def _default_timepts(sys, n):
 
 def _simulate(sys, u, initial_state, timepts):
     """Simulated output of one model and its time points."""
-    from .sandwich import SandwichSystem
 
     if not isinstance(sys, ct.InputOutputSystem):
         raise TypeError(

@@ -39,7 +39,7 @@ import numba
 import numpy as np
 import control as ct
 
-from ._validation import check_positive, check_nonnegative, check_signal
+from .._checks import check_positive, check_nonnegative, check_signal
 
 __all__ = ['Backlash', 'backlash_response', 'INCREASE', 'MEMORY', 'DECREASE']
 

@@ -8,8 +8,9 @@ matplotlib is used.
 
 import numpy as np
 
-from .backlash import Backlash
-from ._validation import check_signal
+from ..model.backlash import Backlash
+from ..model.sandwich import SandwichSystem
+from .._checks import check_signal
 
 __all__ = ['plot_hysteresis']
 
@@ -130,7 +131,6 @@ def plot_hysteresis(model_or_backlash, x=None, true=None, ax=None,
 
 def _as_backlash(name, obj, normalize):
     """The Backlash of `obj` (a Backlash or a SandwichSystem)."""
-    from .sandwich import SandwichSystem
 
     if isinstance(obj, Backlash):
         return obj

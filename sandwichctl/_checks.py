@@ -152,3 +152,12 @@ def _as_real_scalar(name, value):
 
 def _is_str(value):
     return isinstance(value, (str, bytes))
+
+
+def check_dt(name, dt):
+    """A discrete sampling time: a positive number or True (unspecified)."""
+    if dt is None or dt is False or (dt is not True and not dt > 0):
+        raise ValueError(f"{name} must be a positive sampling time or True "
+                         f"(discrete, unspecified); got {dt!r}. The backlash "
+                         f"and its inverse are discrete-time maps")
+    return dt

@@ -1,9 +1,8 @@
 r"""Recursive identification of sandwich systems (Section 3 of the paper).
 
-`identify` estimates the normalised parameter vector of eq. (2.5) from
-input/output data and returns an `IdentificationResult` whose ``model``
-is a `SandwichSystem`. It is built on `RecursiveIdentifier`, a streaming
-estimator whose ``update(u_k, y_k)`` takes one sample at a time.
+`RecursiveIdentifier` is a streaming estimator of the normalised
+parameter vector of eq. (2.5): ``update(u_k, y_k)`` takes one sample at a
+time. `identify` runs it over a whole record.
 
 Methods
 -------
@@ -22,23 +21,23 @@ The interpretations of the places where the paper is loose are listed in
 ``docs/algorithm.md``; each is an option named after the paper's symbol.
 """
 
-import time
+
 import warnings
 
 import numpy as np
-from scipy.optimize import OptimizeResult
 
 from ._predictor import padding, store_state
 from ._qp import simplex_qp, QPError
 from ._recursive import (bundle_prepare, bundle_finish, gradient_run,
                          rpem_run, LONG, SHORT, NULL, STOP, SKIP, RPEM_OK,
                          RPEM_LIMITED, RPEM_REJECTED, RPEM_RESET)
-from .sandwich import SandwichSystem, theta_labels
-from ._validation import (check_int, check_positive, check_nonnegative,
-                          check_signal, check_vector, check_finite)
+from .result import IdentificationResult
+from ..model.sandwich import SandwichSystem, theta_labels
+from .._checks import (check_int, check_positive, check_nonnegative,
+                       check_signal, check_vector, check_finite)
 
-__all__ = ['identify', 'RecursiveIdentifier', 'IdentificationResult',
-           'parameter_error']
+__all__ = ['RecursiveIdentifier']
+
 
 _KIND_NAMES = {LONG: 'long', SHORT: 'short', NULL: 'null', STOP: 'stop',
                SKIP: 'skip', RPEM_LIMITED: 'limited',
@@ -63,36 +62,6 @@ DEFAULTS = {
 }
 
 _CHUNK = 4096
-
-
-def parameter_error(theta_hat, theta_true):
-    """Normalised parameter error ||theta_hat - theta|| / ||theta||.
-
-    Parameters
-    ----------
-    theta_hat : array_like, shape (p,) or (N, p)
-        One estimate or a history of estimates (one per row).
-    theta_true : array_like, shape (p,)
-        The true parameter vector.
-
-    Returns
-    -------
-    float or ndarray of shape (N,)
-
-    Examples
-    --------
-    >>> import sandwichctl as sw
-    >>> float(sw.parameter_error([1.1, 2.0], [1.0, 2.0]))  # doctest: +ELLIPSIS
-    0.0447...
-    """
-    theta_true = np.asarray(theta_true, dtype=float)
-    theta_hat = np.asarray(theta_hat, dtype=float)
-    if theta_hat.shape[-1] != theta_true.size:
-        raise ValueError(
-            f"theta_hat has {theta_hat.shape[-1]} parameters per estimate "
-            f"but theta_true has {theta_true.size}")
-    return (np.linalg.norm(theta_hat - theta_true, axis=-1)
-            / np.linalg.norm(theta_true))
 
 
 def _check_options(method, options):
@@ -451,247 +420,3 @@ class RecursiveIdentifier:
             method=self.method, options=dict(self.options),
             orders=dict(self.orders), theta_labels=list(self.labels),
             theta0=self.theta0.copy(), nit=self.n_samples, elapsed=elapsed)
-
-
-class IdentificationResult(OptimizeResult):
-    """Result of `identify` (a `scipy.optimize.OptimizeResult`).
-
-    Attributes
-    ----------
-    model : SandwichSystem
-        The identified, normalised model (b0 = d0 = 1).
-    theta : ndarray
-        Final estimate, order of eq. (2.5); names in `theta_labels`.
-    history : ndarray, shape (N, p)
-        theta(k) after every sample (empty for batch methods).
-    errors : ndarray, shape (N,)
-        A-priori prediction errors e(k) (recursive methods) or final
-        residuals (batch methods).
-    counts : dict
-        Numbers of long, short, null and stop steps (and skipped samples
-        of the gradient method).
-    success : bool
-        False if the estimate diverged or the method failed.
-    message : str
-        What happened.
-    method, options, orders, theta0, nit, elapsed
-        The method, its options, the orders, the start, the number of
-        samples or iterations, and the wall time in seconds.
-    """
-
-    def __repr__(self):
-        lines = [f"IdentificationResult ({self.method}): "
-                 f"{'success' if self.success else 'FAILED'}",
-                 f"  {self.message}"]
-        if getattr(self, 'counts', None):
-            lines.append('  steps: ' + ', '.join(
-                f"{k} {v}" for k, v in self.counts.items() if v))
-        lines.append('  theta: ' + ', '.join(
-            f"{name}={val:.4g}" for name, val in
-            zip(self.theta_labels, self.theta)))
-        return '\n'.join(lines)
-
-    __str__ = __repr__
-
-    def parameter_error(self, true_theta):
-        """Normalised error ||theta(k) - theta|| / ||theta|| for every k."""
-        return parameter_error(self.history, true_theta)
-
-    def plot_convergence(self, true_theta=None, axes=None, label=None,
-                         **line_kw):
-        """Plot every parameter's trajectory theta(k).
-
-        Parameters
-        ----------
-        true_theta : array_like, optional
-            True (equivalent) parameters, drawn as dashed lines.
-        axes : array of matplotlib Axes, optional
-            One axes per parameter, e.g. from an earlier call, to overlay
-            several methods.
-        label : str, optional
-            Legend label of these trajectories (default: the method).
-        **line_kw
-            Passed to ``Axes.plot`` (e.g. color, ls).
-
-        Returns
-        -------
-        ndarray of matplotlib Axes
-        """
-        import matplotlib.pyplot as plt
-        p = len(self.theta_labels)
-        if axes is None:
-            ncol = 3
-            nrow = -(-p // ncol)
-            fig, axes = plt.subplots(nrow, ncol, figsize=(11, 2.2 * nrow),
-                                     sharex=True, squeeze=False)
-            for ax in axes.flat[p:]:
-                ax.set_visible(False)
-        axes = np.asarray(axes)
-        k = np.arange(1, self.history.shape[0] + 1)
-        for i, ax in enumerate(axes.flat[:p]):
-            ax.plot(k, self.history[:, i], label=label or self.method,
-                    **line_kw)
-            if true_theta is not None:
-                ax.axhline(np.asarray(true_theta)[i], color='k', ls='--',
-                           lw=0.8)
-            ax.set_title(self.theta_labels[i], fontsize=9)
-        axes.flat[0].legend(fontsize=8)
-        for ax in axes[-1] if axes.ndim == 2 else axes[-1:]:
-            ax.set_xlabel('k')
-        return axes
-
-
-def identify(u, y, na, nb, nc, nd, q1=1, q2=1, method='oe', theta0=None,
-             dt=True, refine=None, progress=False, **options):
-    r"""Identify a sandwich system from input/output data.
-
-    Parameters
-    ----------
-    u, y : array_like, shape (N,)
-        Measured input and output (the system starts at rest).
-    na, nb, nc, nd : int
-        Orders of eq. (2.1); nb and nd count coefficients after
-        b0 = d0 = 1.
-    q1, q2 : int, optional
-        Known delays (default 1).
-    method : {'oe', 'rpem', 'bundle', 'gradient'}, optional
-        ``'oe'`` (default) is the library's best: two recursive passes,
-        the prediction-error estimator run series-parallel (``'rpem'``
-        with ``warmup=N``) and the paper's bundle method, each give the
-        start of a batch output-error refinement with multi-start
-        (`refine`); the lower output-error cost wins. ``'rpem'`` is the recursive
-        Gauss-Newton estimator alone; ``'bundle'`` and ``'gradient'`` are
-        the paper's method and its baseline. ``docs/algorithm.md`` gives
-        the measured table behind this default.
-    theta0 : array_like, optional
-        Starting point (order of eq. (2.5)).
-    dt : float or True, optional
-        Sampling time of the returned model.
-    refine : bool or dict, optional
-        Follow the recursive estimate by `refine` (a dict gives its
-        keyword arguments). Default: True for ``'oe'`` (with
-        ``n_starts=8``), False otherwise.
-    progress : bool, optional
-        Print progress to stderr on long runs.
-    **options
-        Options of the recursive method (see `RecursiveIdentifier`).
-
-    Returns
-    -------
-    IdentificationResult
-        With ``model`` (a normalised `SandwichSystem`), ``theta``,
-        ``history``, ``errors``, step ``counts``, ``success`` and
-        ``message``. After refinement also ``std``, ``fit`` and
-        ``recursive`` (the recursive pass's result).
-
-    Warns
-    -----
-    RuntimeWarning
-        If the data barely excite the backlash or a parameter is poorly
-        determined (large standard error), or if the estimate diverged.
-
-    Examples
-    --------
-    >>> import sandwichctl as sw
-    >>> plant = sw.examples.paper_plant()
-    >>> u = sw.examples.paper_input(2000, seed=1)
-    >>> y = plant.simulate(u).outputs
-    >>> res = sw.identify(u, y, **plant.orders)
-    >>> res.success, bool(sw.parameter_error(res.theta, plant.theta) < 1e-3)
-    (True, True)
-    """
-    u = check_signal('u', u)
-    y = check_signal('y', y)
-    if u.size != y.size:
-        raise ValueError(f"u and y must have the same length; got "
-                         f"{u.size} and {y.size} samples")
-    if np.ptp(u) == 0:
-        raise ValueError("u is constant; a constant input cannot excite "
-                         "the backlash or identify the dynamics. Use a "
-                         "persistently exciting input (e.g. noise, or "
-                         "steps plus sines)")
-    if method not in ('oe',) + tuple(DEFAULTS):
-        raise ValueError(f"method must be one of "
-                         f"{['oe'] + sorted(DEFAULTS)}; got {method!r}")
-    recursive = 'rpem' if method == 'oe' else method
-    if method == 'oe':
-        options = dict({'warmup': u.size}, **options)
-        if refine is None:
-            refine = {'n_starts': 8, 'seed': 0}
-    est = RecursiveIdentifier(na, nb, nc, nd, q1, q2, method=recursive,
-                              theta0=theta0, dt=dt, **options)
-    p = len(est.labels)
-    needed = 10 * p + padding(est._o)
-    if u.size < needed:
-        raise ValueError(
-            f"u and y have {u.size} samples, too few for {p} parameters "
-            f"with these orders and delays; give at least {needed}")
-    start = time.perf_counter()
-    step = max(u.size // 20, 1)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter('always')
-        for lo in range(0, u.size, step):
-            est.update_many(u[lo:lo + step], y[lo:lo + step])
-            if progress:
-                _progress(recursive, est.n_samples, u.size, start)
-            if est.diverged_at is not None:
-                break
-    for w in caught:
-        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    result = est.result(elapsed=time.perf_counter() - start)
-    if refine:
-        from .refine import refine as _refine
-        kwargs = refine if isinstance(refine, dict) else {}
-        refined = _refine(result.model, u, y, progress=progress, **kwargs)
-        if method == 'oe':
-            # a second, independent start: the paper's bundle method
-            # (series-parallel, robust but biased under noise)
-            with warnings.catch_warnings():
-                warnings.simplefilter('ignore', RuntimeWarning)
-                alt = identify(u, y, na, nb, nc, nd, q1, q2,
-                               method='bundle', dt=dt, refine=kwargs)
-            if alt.cost < refined.cost:
-                refined = alt
-        refined.recursive = result
-        refined.history = result.history
-        refined.method = f"{recursive}+refine" if method != 'oe' else 'oe'
-        refined.elapsed = time.perf_counter() - start
-        result = refined
-    _check_excitation(result, u)
-    return result
-
-
-def _check_excitation(result, u):
-    """Warn if the identified backlash barely leaves its memory zone."""
-    model = result.model
-    with np.errstate(all='ignore'):
-        x = model.simulate(u, internal=True).outputs[1]
-    if not np.all(np.isfinite(x)):
-        result.excitation = np.nan          # unstable estimate: said already
-        return
-    _, zones = model.backlash.response(x, return_zones=True)
-    moving = float(np.mean(zones != 0))
-    result.excitation = moving
-    if moving < 0.01:
-        warnings.warn(
-            f"the backlash of the identified model is outside its memory "
-            f"zone in only {moving:.1%} of the samples: the data hardly "
-            f"excite it, so m1, m2, D1, D2 are unreliable (is the input "
-            f"amplitude smaller than the dead band?)", RuntimeWarning,
-            stacklevel=3)
-
-
-def _progress(method, done, total, start):
-    import sys
-    elapsed = time.perf_counter() - start
-    left = elapsed / done * (total - done) if done else 0.0
-    text = (f"{method:>9}: {done}/{total} samples, {elapsed:5.1f}s elapsed, "
-            f"~{left:4.1f}s left")
-    if sys.stderr.isatty():
-        bar = '#' * int(30 * done / total)
-        sys.stderr.write(f"\r{method:>9}: [{bar:<30}] " + text[11:])
-        if done >= total:
-            sys.stderr.write('\n')
-    elif done >= total or (20 * done // total) % 5 == 0:
-        sys.stderr.write(text + '\n')       # a line every 25% in logs
-    sys.stderr.flush()

@@ -1,0 +1,18 @@
+"""Control design: cancel the backlash, and close the loop around it.
+
+- `inverse`: the backlash inverse and the causal inverse of a linear block.
+- `compensator`: `sandwich_compensator`, the two inverses in front of a
+  plant, and `linearized_plant`, the model without its backlash.
+- `closedloop`: a linear tracking controller, the closed loop (fast and as
+  a python-control system), and the with/without comparison.
+- `descfcn`: the backlash's describing function and limit cycles.
+"""
+
+from . import inverse, compensator, closedloop, descfcn
+from .inverse import *
+from .compensator import *
+from .closedloop import *
+from .descfcn import *
+
+__all__ = (inverse.__all__ + compensator.__all__ + closedloop.__all__
+           + descfcn.__all__)
