@@ -13,6 +13,8 @@ is also available here (``sw.identify``, ``sw.SandwichSystem``, ...):
 - `identification`: recursive (paper) and batch identifiers, results;
 - `design`: inverses, compensator, closed loop, describing function;
 - `tools`: validation, plotting, model files;
+- `data`: test plants and data sets (seeded random sandwich cases, a
+  physically simulated servo drive);
 - `paper`: the paper's example plants and its Section 5 and 6 studies
   (``sw.paper.section5``, ...); ``sw.examples`` is `paper.examples`.
 
@@ -23,7 +25,7 @@ Dependencies run one way: `paper` uses `identification`, `design` and
 >>> import sandwichctl as sw
 """
 
-from . import model, tools, identification, design, paper
+from . import model, tools, identification, design, data, paper
 from .model import *
 from .tools import *
 from .identification import *
@@ -33,4 +35,4 @@ from .paper import examples
 __version__ = '0.1.0'
 
 __all__ = (model.__all__ + tools.__all__ + identification.__all__
-           + design.__all__ + ['examples', 'paper'])
+           + design.__all__ + ['data', 'examples', 'paper'])

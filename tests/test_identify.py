@@ -232,7 +232,10 @@ def test_result_plots_and_repr():
     (dict(y=np.zeros(999)), ValueError, 'same length; got 1000 and 999'),
     (dict(u=np.r_[np.zeros(999), np.nan]), ValueError,
      'u must be finite; sample 999 is nan'),
-    (dict(u=np.sin(np.arange(50)), y=np.zeros(50)), ValueError, 'too few'),
+    (dict(u=np.sin(np.arange(50)), y=np.cos(np.arange(50))), ValueError,
+     'too few'),
+    (dict(y=np.zeros(1000)), ValueError, 'y is constant'),
+    (dict(y=np.full(1000, 2.5)), ValueError, 'y is constant'),
     (dict(u=np.ones(1000)), ValueError, 'u is constant'),
     (dict(k1=0), ValueError, 'k1 must be an integer >= 1'),
     (dict(q=0.5), ValueError, r'q must be in \(0, 0.5\)'),
@@ -249,7 +252,8 @@ def test_result_plots_and_repr():
                                           'length 9'),
 ])
 def test_bad_input(kwargs, exc, match):
-    args = dict(u=np.sin(np.arange(1000)), y=np.ones(1000), na=2, nb=0,
+    args = dict(u=np.sin(np.arange(1000)), y=np.cos(np.arange(1000)), na=2,
+                nb=0,
                 nc=2, nd=1, method='bundle')
     args.update(kwargs)
     with pytest.raises(exc, match=match):

@@ -180,11 +180,38 @@ def test_normalized_output_identical_any_gain_sign(b0, d0, rng):
                                rtol=1e-11, atol=1e-11)
 
 
-def test_normalized_rejects_negative_overall_gain():
+@pytest.mark.parametrize('b0, d0', [(-1.5, 2.0), (1.5, -2.0), (-0.5, -3.0)])
+def test_signed_normalisation_keeps_output_and_sign(rng, b0, d0):
+    """b0 = 1, d0 = sign(b0 d0): the same output from rest, any signs."""
     plant = sw.SandwichSystem.from_coefficients(
-        a=[], b=[-1.0], c=[], d=[1.0], m1=1, m2=1, D1=0.1, D2=0.1)
-    with pytest.raises(ValueError, match='opposite signs'):
-        plant.normalized()
+        a=[-0.5], b=[b0, 0.3], c=[0.2, 0.1], d=[d0, -0.4], m1=0.8, m2=1.3,
+        D1=0.1, D2=0.3, q1=1, q2=0, dt=0.01, name='ax')
+    norm = plant.normalized()
+    assert norm.is_normalized and norm.name == 'ax'
+    assert norm.gain_sign == plant.gain_sign == int(np.sign(b0 * d0))
+    assert norm.coefficients['b'][0] == 1
+    assert norm.coefficients['d'][0] == np.sign(b0 * d0)
+    u = rng.standard_normal(300)
+    np.testing.assert_allclose(norm.simulate(u).outputs,
+                               plant.simulate(u).outputs, atol=1e-12)
+    back = sw.SandwichSystem.from_theta(norm.theta, **plant.orders,
+                                        dt=0.01, sign=plant.gain_sign)
+    np.testing.assert_allclose(back.simulate(u).outputs,
+                               plant.simulate(u).outputs, atol=1e-12)
+
+
+def test_declared_orders_keep_zero_coefficients():
+    """An identified coefficient that is exactly 0 does not drop an order."""
+    plant = sw.SandwichSystem.from_coefficients(
+        a=[0.5, 0.0], b=[1.0, 0.0], c=[0.0], d=[1.0, 0.0], m1=1, m2=1,
+        D1=0.1, D2=0.1, q1=1, q2=1)
+    assert plant.orders == {'na': 2, 'nb': 1, 'nc': 1, 'nd': 1, 'q1': 1,
+                            'q2': 1}
+    assert plant.theta.size == 1 + 2 + 4 + 1 + 1
+    assert plant.normalized().orders == plant.orders
+    with pytest.raises(ValueError, match='smaller'):
+        sw.SandwichSystem(plant.L1, plant.backlash, plant.L2,
+                          orders={'na': 0})
 
 
 def test_theta_round_trip(rng):

@@ -4,19 +4,25 @@
 - `recursive`: the paper's recursive methods (bundle, gradient) and the
   recursive prediction-error estimator, as the streaming
   `RecursiveIdentifier`.
+- `linear`: `identify_linear`, the linear output-error baseline (MATLAB
+  ``oe`` semantics) every sandwich fit is reported against.
 - `batch`: `refine`, the batch output-error refinement of a model on a
   whole record.
 - `pipeline`: `identify`, which chains them.
 
-The private modules hold the compiled parts: `_predictor` (the model
-output and its sensitivities, the stability predicate), `_recursive` (the
-per-sample steps) and `_qp` (the piqp wrapper).
+The private modules hold the parts: `_predictor` (the model output and
+its sensitivities, the stability predicate), `_recursive` (the compiled
+per-sample steps), `_oe` (the scaled output-error problem and its
+Levenberg-Marquardt solver), `_nested` (sandwich starts nested in a
+linear fit) and `_qp` (the piqp wrapper).
 """
 
-from . import result, recursive, batch, pipeline
+from . import result, recursive, linear, batch, pipeline
 from .result import *
 from .recursive import *
+from .linear import *
 from .batch import *
 from .pipeline import *
 
-__all__ = result.__all__ + recursive.__all__ + batch.__all__ + pipeline.__all__
+__all__ = (result.__all__ + recursive.__all__ + linear.__all__
+           + batch.__all__ + pipeline.__all__)

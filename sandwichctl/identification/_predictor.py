@@ -69,6 +69,21 @@ def l1_output(theta, o, u, xs, t):
 
 
 @numba.njit(cache=True, inline='always')
+def l2_output(theta, o, vs, past, k):
+    """y_hat(k) of eq. (2.1) from the backlash outputs vs and the past
+    outputs `past` (the model's own, or measured ones)."""
+    nc, nd, q2 = o[2], o[3], o[5]
+    idd = _idx(o)[3]
+    y = 0.0
+    for i in range(1, nc + 1):
+        y -= theta[i - 1] * past[k - i]
+    for j in range(nd + 1):
+        dj = 1.0 if j == 0 else theta[idd + j - 1]
+        y += dj * vs[k - q2 - j]
+    return y
+
+
+@numba.njit(cache=True, inline='always')
 def add_direct_partials(out, scale, zone, x, m1, m2, D1, D2, im):
     """Add scale * (direct derivative of v(k) w.r.t. m1, m2, D1, D2).
 
@@ -188,12 +203,7 @@ def oe_step(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k, ymeas=None):
     # L2, eq. (2.1)
     parallel = ymeas is None
     past = ys if parallel else ymeas
-    y = 0.0
-    for i in range(1, nc + 1):
-        y -= theta[i - 1] * past[k - i]
-    for j in range(nd + 1):
-        dj = 1.0 if j == 0 else theta[idd + j - 1]
-        y += dj * vs[k - q2 - j]
+    y = l2_output(theta, o, vs, past, k)
     ys[k] = y
     for r in range(p):
         acc = 0.0
@@ -255,11 +265,47 @@ def oe_simulate(theta, o, u, pad, xs, vs, zs, ys, Sx, Sv, Sy):
         oe_step(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k)
 
 
-def simulate_with_sensitivities(theta, o, u):
+@numba.njit(cache=True)
+def sp_simulate(theta, o, u, ymeas, pad, xs, vs, zs, ys, Sx, Sv, Sy):
+    """`oe_simulate` with L2's past outputs measured (series-parallel)."""
+    for k in range(pad, u.size):
+        oe_step(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k, ymeas)
+
+
+@numba.njit(cache=True)
+def _oe_output_padded(theta, o, u, pad, xs, vs, ys):
+    im = _idx(o)[1]
+    m1, m2, D1, D2 = theta[im], theta[im + 1], theta[im + 2], theta[im + 3]
+    for k in range(pad, u.size):
+        x = l1_output(theta, o, u, xs, k)
+        xs[k] = x
+        v, _ = backlash_step(x, xs[k - 1], vs[k - 1], m1, m2, D1, D2)
+        vs[k] = v
+        ys[k] = l2_output(theta, o, vs, ys, k)
+
+
+def oe_output(theta, o, u):
+    """Simulated output y_hat (no sensitivities), from zero state.
+
+    The same recursion as `oe_step` without the derivatives: the cheap
+    cost evaluation of a trial step.
+    """
+    pad = padding(o)
+    n = u.size
+    up = np.zeros(pad + n)
+    up[pad:] = u
+    xs, vs, ys = np.zeros(pad + n), np.zeros(pad + n), np.zeros(pad + n)
+    _oe_output_padded(np.ascontiguousarray(theta, dtype=float), o, up, pad,
+                      xs, vs, ys)
+    return ys[pad:]
+
+
+def simulate_with_sensitivities(theta, o, u, ymeas=None):
     """Simulated output y_hat and Jacobian d y_hat / d theta (N x p).
 
     Zero initial conditions, like the estimators. Returns (y_hat, J,
-    zones).
+    zones). With `ymeas` (the measured output), L2's past outputs are
+    measured ones: the series-parallel predictor and its Jacobian.
     """
     pad = padding(o)
     n = u.size
@@ -269,6 +315,11 @@ def simulate_with_sensitivities(theta, o, u):
     zs = np.zeros(pad + n, dtype=np.int64)
     p = theta.size
     Sx, Sv, Sy = (np.zeros((pad + n, p)) for _ in range(3))
-    oe_simulate(np.ascontiguousarray(theta, dtype=float), o, up, pad, xs, vs,
-                zs, ys, Sx, Sv, Sy)
+    theta = np.ascontiguousarray(theta, dtype=float)
+    if ymeas is None:
+        oe_simulate(theta, o, up, pad, xs, vs, zs, ys, Sx, Sv, Sy)
+    else:
+        yp = np.zeros(pad + n)
+        yp[pad:] = ymeas
+        sp_simulate(theta, o, up, yp, pad, xs, vs, zs, ys, Sx, Sv, Sy)
     return ys[pad:].copy(), Sy[pad:].copy(), zs[pad:].copy()

@@ -8,158 +8,215 @@ with :math:`\hat y` *simulated* by the model from the input alone (output
 error). Unlike a predictor that feeds measured past outputs into L2,
 this is unbiased under white output noise.
 
+Units, sign and integrators
+---------------------------
+The fit does not depend on the data's units: u and y are divided by their
+standard deviations before the fit, and the model is mapped back (the
+slopes scale by sy/su, the thresholds by su). The sign of the overall
+gain is taken out of the output, so the backlash slopes stay positive and
+a negative gain is carried by d0 = -1 (`SandwichSystem.normalized`).
+Poles of the model at z = 1 (integrators) are fixed, and only the other
+poles are kept stable.
+
 Method, and why it copes with the nonsmoothness
 -----------------------------------------------
 Q is piecewise smooth in theta. Its pieces are the zone sequences of
 eq. (2.2), and inside a piece the exact Jacobian J comes from the
-recursive sensitivities (through L1, the backlash memory and L2; see
-`simulate_with_sensitivities`). At a kink, the zone that eq. (2.2)
-selects gives one of the limiting Jacobians, which is an element of
-Clarke's generalised Jacobian.
+recursive sensitivities (through L1, the backlash memory and L2). At a
+kink, the zone that eq. (2.2) selects gives one of the limiting
+Jacobians, which is an element of Clarke's generalised Jacobian.
 
-Each iteration is a Levenberg-Marquardt step, solved with piqp as a
-box-constrained QP,
+Each iteration is a Levenberg-Marquardt step, solved as a
+box-constrained QP (piqp when a bound binds),
 
 .. math:: \min_d \tfrac12 d^T (J^T J + \mu\,\mathrm{diag}(J^T J)) d
           - (J^T r)^T d \quad\text{s.t.}\quad m_i + d \ge m_{min},\;
           D_i + d \ge 0,
 
-and is accepted only if Q decreases and both denominators stay stable.
-A step that crosses a kink without decreasing Q is refused, and mu
-grows, so the next step is shorter and stays closer to the current
-piece. This is the same safeguard a proximal bundle method gets from its
-proximity term, and here it comes with the Gauss-Newton curvature, which
-on this objective converges in tens of iterations, not thousands.
-Multi-start guards against the local minima that a nonconvex output-error
-cost has.
+and is accepted only if Q decreases and the free poles stay stable. A
+step that crosses a kink without decreasing Q is refused, and mu grows,
+so the next step is shorter and stays closer to the current piece. This
+is the same safeguard a proximal bundle method gets from its proximity
+term, and here it comes with the Gauss-Newton curvature, which on this
+objective converges in tens of iterations, not thousands. Multi-start
+guards against the local minima that a nonconvex output-error cost has.
 """
 
 import time
 import warnings
 
 import numpy as np
+from tqdm.auto import tqdm
 
-from ._predictor import (simulate_with_sensitivities, is_stable,
-                         stable_and_finite)
-from ._qp import box_qp, QPError
-from .result import IdentificationResult
+from ._oe import Structure, lm
+from .result import IdentificationResult, backlash_significance, whiteness
 from ..model.sandwich import SandwichSystem
 from .._checks import check_signal, check_int, check_positive
 
 __all__ = ['refine']
 
-
-def _admissible(theta, o, m_min):
-    """Finite, stable (see `_predictor.stable_and_finite`), m >= m_min,
-    D >= 0."""
-    im = o[2] + o[0]
-    return (stable_and_finite(theta, o)
-            and np.all(theta[im:im + 2] >= m_min)
-            and np.all(theta[im + 2:im + 4] >= 0))
+#: A fit must be at least this many percent to count as explaining the data.
+MIN_FIT = 5.0
 
 
-def _lm(theta, o, u, y, max_iter, tol, m_min):
-    """Levenberg-Marquardt with box constraints; returns a dict."""
-    p = theta.size
-    im = o[2] + o[0]
-    lo = np.full(p, -np.inf)
-    hi = np.full(p, np.inf)
-    yhat, J, _ = simulate_with_sensitivities(theta, o, u)
-    r = y - yhat
-    cost = 0.5 * r @ r
-    if not np.isfinite(cost):
-        cost = np.inf
-    mu = 1e-3
-    history = [theta.copy()]
-    message = f"reached max_iter = {max_iter}"
-    it = 0
-    for it in range(1, max_iter + 1):
-        A = J.T @ J
-        g = J.T @ r
-        scale = np.maximum(np.diag(A), 1e-12 * max(np.max(np.diag(A)), 1e-300))
-        accepted = False
-        while mu < 1e12:
-            lo[im:im + 2] = m_min - theta[im:im + 2]
-            lo[im + 2:im + 4] = -theta[im + 2:im + 4]
-            try:
-                d = box_qp(A + mu * np.diag(scale), -g, lo, hi)
-            except QPError:
-                mu *= 10
-                continue
-            trial = theta + d
-            trial[im:im + 2] = np.maximum(trial[im:im + 2], m_min)
-            trial[im + 2:im + 4] = np.maximum(trial[im + 2:im + 4], 0.0)
-            if not _admissible(trial, o, m_min):
-                mu *= 10
-                continue
-            y_t, J_t, _ = simulate_with_sensitivities(trial, o, u)
-            r_t = y - y_t
-            cost_t = 0.5 * r_t @ r_t
-            if np.isfinite(cost_t) and cost_t < cost:
-                accepted = True
-                break
-            mu *= 10
-        if not accepted:
-            message = "converged: no decreasing step found (mu too large)"
-            break
-        decrease = ((cost - cost_t) / max(cost, 1e-300)
-                    if np.isfinite(cost) else 1.0)
-        step = np.linalg.norm(trial - theta)
-        theta, yhat, J, r, cost = trial, y_t, J_t, r_t, cost_t
-        history.append(theta.copy())
-        mu = max(mu / 3, 1e-9)
-        if decrease < tol or step < tol * (1 + np.linalg.norm(theta)):
-            message = (f"converged: relative decrease {decrease:.1e} or "
-                       f"step {step:.1e} below tol")
-            break
-    return dict(theta=theta, cost=cost, J=J, r=r, yhat=yhat, nit=it,
-                history=np.array(history), message=message)
+def _scale(x):
+    """A positive scale of a signal: its standard deviation (RMS if flat)."""
+    s = float(np.std(x))
+    if not s > 0:
+        s = float(np.sqrt(np.mean(np.square(x))))
+    return s if s > 0 else 1.0
 
 
-def _admissible_start(theta, o, m_min):
-    """Move a start into the domain: slopes >= m_min, D >= 0, and unstable
-    denominators pulled inside the unit circle (roots scaled by 0.9 until
-    stable)."""
-    theta = theta.copy()
-    na, nb, nc, nd = o[:4]
-    im = nc + na
-    theta[~np.isfinite(theta)] = 0.0
-    theta[im:im + 2] = np.maximum(theta[im:im + 2], max(m_min, 1e-3))
-    theta[im + 2:im + 4] = np.maximum(theta[im + 2:im + 4], 0.0)
-    for start, n in ((0, nc), (nc, na)):
-        powers = 0.9 ** np.arange(1, n + 1)
-        for _ in range(200):
-            if is_stable(theta, start, n, 1e-3):
-                break
-            theta[start:start + n] *= powers
-    return theta
+def _unit_poles(den, tol=1e-9):
+    """How many roots of the monic denominator 1, a1, ... sit at z = 1."""
+    poly = np.r_[1.0, den]
+    count = 0
+    while poly.size > 1 and abs(np.polyval(poly, 1.0)) <= tol * np.sum(
+            np.abs(poly)):
+        poly = np.polydiv(poly, [1.0, -1.0])[0]
+        count += 1
+    return count
 
 
-def _perturb(theta, o, rng, spread, m_min):
-    """A random admissible start near theta (multi-start)."""
-    na, nb, nc, nd = o[:4]
-    im = nc + na
+class Problem:
+    """A scaled output-error problem: data, structure, sign (private).
+
+    Holds ``u / su`` and ``sign * y / sy`` and maps reduced parameters
+    phi (see `_oe.Structure`) to models and results in the user's units.
+    """
+
+    def __init__(self, u, y, orders, i1=0, i2=0, sign=1, dt=True,
+                 name=None):
+        self.orders = {k: orders[k] for k in ('na', 'nb', 'nc', 'nd', 'q1',
+                                               'q2')}
+        self.st = Structure(*(self.orders[k] for k in
+                              ('na', 'nb', 'nc', 'nd', 'q1', 'q2')), i1, i2)
+        self.sign = 1 if sign >= 0 else -1
+        self.su, self.sy = _scale(u), _scale(y)
+        self.u_user, self.y_user = u, y
+        self.u = u / self.su
+        self.y = self.sign * y / self.sy
+        self.dt, self.name = dt, name
+        # theta_user = theta_scaled * unit: slopes sy/su, thresholds su
+        im = self.st.im_theta
+        self.unit = np.ones(self.st.p)
+        self.unit[im:im + 2] = self.sy / self.su
+        self.unit[im + 2:im + 4] = self.su
+
+    def phi_of_model(self, model):
+        """Reduced scaled parameters of a model of this structure."""
+        theta = model.normalized().theta / self.unit
+        return self.st.phi(theta)
+
+    def model(self, phi):
+        """The model of phi in the user's units (signed normalisation)."""
+        return SandwichSystem.from_theta(
+            self.st.theta(phi) * self.unit, **self.orders, dt=self.dt,
+            name=self.name, sign=self.sign)
+
+    def result(self, out, method, linear=None, extra=None, min_fit=MIN_FIT):
+        """The `IdentificationResult` of an `_oe.lm` output, with verdict."""
+        phi = out['phi']
+        theta = self.st.theta(phi) * self.unit
+        n, q = self.u.size, self.st.q
+        r = self.sign * self.sy * out['r']          # user units
+        cost = 0.5 * float(r @ r)
+        denom = np.linalg.norm(self.y_user - self.y_user.mean())
+        fit = 100 * (1 - np.linalg.norm(r) / denom) if denom > 0 \
+            else -np.inf
+        J = out['J']
+        sigma2 = 2 * out['cost'] / max(n - q, 1)
+        std = np.full(theta.size, np.inf)
+        if np.all(np.isfinite(J)):
+            with np.errstate(all='ignore'):
+                cov_phi = sigma2 * np.linalg.pinv(J.T @ J)
+                T = self.st.T * self.unit[:, None]
+                std = np.sqrt(np.clip(np.diag(T @ cov_phi @ T.T), 0, None))
+        stable = self.st.poles_stable(phi)
+        integ = {'L1': self.st.i1, 'L2': self.st.i2}
+        problems = []
+        if not (np.all(np.isfinite(theta)) and np.isfinite(cost)):
+            problems.append("the estimate is not finite")
+        elif not stable:
+            problems.append("the model is unstable (a free pole on or "
+                            "outside the unit circle)")
+        if not out['converged']:
+            problems.append("the optimiser did not converge")
+        if not fit > min_fit:
+            problems.append(f"the model does not explain the data (fit "
+                            f"{fit:.3g} % <= {min_fit:g} %)")
+        significance = None
+        if linear is not None:
+            if out['cost'] > linear['cost_scaled'] * (1 + 1e-9) + 1e-300:
+                problems.append(f"the fit is worse than the linear "
+                                f"baseline ({fit:.3g} % < "
+                                f"{linear['fit']:.3g} %)")
+            n_lin = linear['n_params']
+            significance = backlash_significance(
+                linear['cost'], cost, n_lin, q, n)
+        success = not problems
+        message = out['message']
+        if problems:
+            message = '; '.join(problems) + f" [{message}]"
+        labels = SandwichSystem.from_theta(
+            theta, **self.orders).theta_labels
+        res = IdentificationResult(
+            model=self.model(phi), theta=theta, history=np.zeros((0,
+                                                                  theta.size)),
+            errors=r, counts={'iterations': out['nit']},
+            success=bool(success), message=message, method=method,
+            options={}, orders=dict(self.orders), theta_labels=labels,
+            nit=out['nit'], std=std, fit=float(fit), cost=cost,
+            integrators=integ, linear=linear, significance=significance,
+            whiteness=whiteness(r), converged=bool(out['converged']))
+        if extra:
+            res.update(extra)
+        return res
+
+
+def _perturb(st, phi, rng, spread, m_min):
+    """A random admissible start near phi (multi-start)."""
+    im = st.im
     for _ in range(100):
-        trial = theta.copy()
-        lin = np.r_[0:im, im + 4:theta.size]
+        trial = phi.copy()
+        lin = np.r_[0:im, im + 4:phi.size]
         trial[lin] += spread * rng.standard_normal(lin.size) * (
-            np.abs(theta[lin]) + 0.1)
+            np.abs(phi[lin]) + 0.1)
         trial[im:im + 4] *= np.exp(spread * rng.standard_normal(4))
         trial[im + 2:im + 4] += 1e-3
-        if _admissible(trial, o, m_min):
+        trial = st.clip(trial, m_min)
+        if st.stable(trial):
             return trial
-    return theta.copy()
+    return phi.copy()
+
+
+def _admissible_start(st, phi, m_min):
+    """Move a start into the domain: slopes >= m_min, D >= 0, and unstable
+    free denominators pulled inside the unit circle (roots scaled by 0.9
+    until stable)."""
+    phi = phi.copy()
+    phi[~np.isfinite(phi)] = 0.0
+    phi = st.clip(phi, max(m_min, 1e-3 * max(phi[st.im], phi[st.im + 1],
+                                             1e-300)))
+    for start, n in ((0, st.nc_free), (st.nc_free, st.na_free)):
+        powers = 0.9 ** np.arange(1, n + 1)
+        for _ in range(200):
+            if st.poles_stable(phi):
+                break
+            phi[start:start + n] *= powers
+    return phi
 
 
 def refine(model, u, y, max_iter=100, tol=1e-10, n_starts=1, spread=0.3,
-           seed=None, m_min=1e-6, progress=False):
+           seed=None, m_min=1e-9, progress=False):
     r"""Refine a sandwich model on a whole record by output-error LM.
 
     Parameters
     ----------
     model : SandwichSystem
-        Initial model (e.g. ``identify(...).model``); its orders and
-        delays are kept. It is normalised (b0 = d0 = 1) first.
+        Initial model (e.g. ``identify(...).model``); its orders, delays,
+        integrators (poles exactly at z = 1) and the sign of its gain are
+        kept.
     u, y : array_like, shape (N,)
         Input and measured output, from zero initial state.
     max_iter : int, optional
@@ -175,17 +232,17 @@ def refine(model, u, y, max_iter=100, tol=1e-10, n_starts=1, spread=0.3,
     seed : int or numpy.random.Generator, optional
         Seed of the perturbations.
     m_min : float, optional
-        Lower bound on the slopes m1, m2.
+        Lower bound on the slopes m1, m2, relative to the scaled data.
     progress : bool, optional
-        Print one line per start.
+        Show a progress bar over the starts.
 
     Returns
     -------
     IdentificationResult
-        ``model``, ``theta``, ``history`` (one row per iteration of the
-        best start), ``errors`` (final residuals), ``std`` (standard
-        errors from sigma^2 (J'J)^-1), ``fit`` (percent, as MATLAB's
-        ``compare``), ``cost``, ``success`` and ``message``.
+        ``model`` (in the data's units), ``theta``, ``errors`` (final
+        residuals), ``std`` (standard errors from sigma^2 (J'J)^-1),
+        ``fit`` (percent, as MATLAB's ``compare``), ``cost``, ``success``
+        and ``message``.
 
     Examples
     --------
@@ -212,55 +269,52 @@ def refine(model, u, y, max_iter=100, tol=1e-10, n_starts=1, spread=0.3,
     tol = check_positive('tol', tol)
     spread = check_positive('spread', spread)
     m_min = check_positive('m_min', m_min)
-    orders = model.orders
-    o = tuple(orders[k] for k in ('na', 'nb', 'nc', 'nd', 'q1', 'q2'))
-    theta0 = _admissible_start(model.theta, o, m_min)
-    p = theta0.size
-    if u.size <= 2 * p:
-        raise ValueError(f"u and y have {u.size} samples, too few for {p} "
-                         f"parameters")
+    norm = model.normalized()
+    co = norm.coefficients
+    prob = Problem(u, y, norm.orders, _unit_poles(co['a']),
+                   _unit_poles(co['c']), norm.gain_sign, dt=model.dt,
+                   name=model.name)
+    st = prob.st
+    if u.size <= 2 * st.q:
+        raise ValueError(f"u and y have {u.size} samples, too few for "
+                         f"{st.q} parameters")
+    phi0 = _admissible_start(st, prob.phi_of_model(norm), m_min)
+    st.widen_zero_radius(phi0)
     rng = np.random.default_rng(seed)
     start = time.perf_counter()
     best = None
-    for i in range(n_starts):
-        th = theta0.copy() if i == 0 else _perturb(theta0, o, rng, spread,
-                                                   m_min)
-        th = _admissible_start(th, o, m_min)
-        out = _lm(th, o, u, y, max_iter, tol, m_min)
-        if progress:
-            print(f"refine start {i + 1}/{n_starts}: cost {out['cost']:.6g} "
-                  f"after {out['nit']} iterations", flush=True)
+    for i in _progress_range(n_starts, progress, 'refine'):
+        phi = phi0 if i == 0 else _perturb(st, phi0, rng, spread, m_min)
+        out = lm(st, phi, prob.u, prob.y, max_iter, tol, m_min)
         if best is None or out['cost'] < best['cost']:
             best = out
-    theta = best['theta']
-    r = best['r']
-    dof = max(u.size - p, 1)
-    sigma2 = 2 * best['cost'] / dof
-    with np.errstate(all='ignore'):
-        try:
-            cov = sigma2 * np.linalg.inv(best['J'].T @ best['J'])
-            std = np.sqrt(np.clip(np.diag(cov), 0, None))
-        except np.linalg.LinAlgError:
-            std = np.full(p, np.inf)
-    denom = np.linalg.norm(y - y.mean())
-    fit = 100 * (1 - np.linalg.norm(r) / denom) if denom > 0 else -np.inf
-    success = bool(np.all(np.isfinite(theta)))
-    ill = ~np.isfinite(std) | (std > 0.5 * np.maximum(np.abs(theta), 1e-3))
-    message = best['message']
+    res = prob.result(best, 'refine', extra={
+        'theta0': st.theta(phi0) * prob.unit,
+        'elapsed': time.perf_counter() - start,
+        'options': dict(max_iter=max_iter, tol=tol, n_starts=n_starts,
+                        spread=spread, m_min=m_min)})
+    res.counts['starts'] = n_starts
+    _warn_poorly_determined(res)
+    return res
+
+
+def _warn_poorly_determined(res):
+    """Warn (and say in the message) when standard errors exceed 50%."""
+    ill = ~np.isfinite(res.std) | (res.std > 0.5 * np.maximum(
+        np.abs(res.theta), 1e-3))
     if np.any(ill):
-        names = [n for n, bad in zip(model.theta_labels, ill) if bad]
-        message += (f"; parameters poorly determined by these data "
-                    f"(standard error > 50%): {names}")
-        warnings.warn(f"refine: {names} are poorly determined by the data "
+        names = [n for n, bad in zip(res.theta_labels, ill) if bad]
+        res.message += (f"; parameters poorly determined by these data "
+                        f"(standard error > 50%): {names}")
+        warnings.warn(f"{names} are poorly determined by the data "
                       f"(excitation too small or orders too high?)",
-                      RuntimeWarning, stacklevel=2)
-    return IdentificationResult(
-        model=SandwichSystem.from_theta(theta, **orders, dt=model.dt),
-        theta=theta.copy(), history=best['history'], errors=r,
-        counts={'iterations': best['nit'], 'starts': n_starts},
-        success=success, message=message, method='refine',
-        options=dict(max_iter=max_iter, tol=tol, n_starts=n_starts,
-                     spread=spread, m_min=m_min),
-        orders=dict(orders), theta_labels=model.theta_labels,
-        theta0=theta0, nit=best['nit'], elapsed=time.perf_counter() - start,
-        std=std, fit=fit, cost=best['cost'])
+                      RuntimeWarning, stacklevel=3)
+
+
+def _progress_range(n, progress, desc, step=1):
+    """range(0, n, step), with a tqdm bar (notebook widget in Jupyter,
+    text in a terminal) when asked for."""
+    steps = range(0, n, step)
+    if not progress:
+        return steps
+    return tqdm(steps, desc=desc, leave=False)

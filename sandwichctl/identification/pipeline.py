@@ -1,72 +1,117 @@
 """`identify`: the identification pipeline over a whole record.
 
-It runs a recursive estimator (`RecursiveIdentifier`) and, by default,
-follows it by the batch output-error refinement (`refine`). See
-``docs/algorithm.md`` for the methods and the measured table behind the
-default.
+The default method, ``'oe'``, is output-error identification started from
+the linear model that the sandwich nests:
+
+1. u and y are scaled (units invariance) and a linear output-error model
+   of the same total orders is fitted (`identify_linear`'s core, with
+   integrators declared or found by AIC). It is the baseline.
+2. Its poles and zeros are assigned to L1 and L2 in every way that keeps
+   complex pairs together; each assignment, with m1 = m2 = the linear
+   gain and D1 = D2 = 0, is a sandwich with exactly the linear fit.
+3. From each, the backlash is opened from a few small widths (and kept
+   closed); short Levenberg-Marquardt runs screen the starts and the best
+   ones are refined to convergence.
+4. Every accepted step lowers the cost, and the closed starts begin at the
+   linear cost, so the sandwich never ends worse than the linear model.
+   The verdict (``success``) checks stability, convergence and that the
+   model explains the data.
+
+The paper's recursive methods (``'bundle'``, ``'gradient'``) and the
+recursive prediction-error estimator (``'rpem'``) run through
+`RecursiveIdentifier`, optionally followed by `refine`. See
+``docs/algorithm.md``.
 """
 
+import numbers
 import time
 import warnings
 
 import numpy as np
+from scipy.signal import lfilter
 
-from ._predictor import padding
+from ._nested import splits
+from ._oe import lm
+from ._predictor import padding, stable_and_finite
+from .batch import Problem, refine as _refine, _progress_range, \
+    _warn_poorly_determined, _admissible_start, MIN_FIT
+from .linear import _fit_oe, oe_transfer_function
 from .recursive import RecursiveIdentifier, DEFAULTS
-from .batch import refine as _refine
-from .._checks import check_signal
+from .._checks import check_signal, check_int, check_positive
 
 __all__ = ['identify']
 
+#: Options of method='oe' and their defaults.
+OE_DEFAULTS = dict(widths=(0.05, 0.25), screen_iter=8, keep=3, max_iter=200,
+                   tol=1e-10, min_fit=MIN_FIT)
 
 def identify(u, y, na, nb, nc, nd, q1=1, q2=1, method='oe', theta0=None,
-             dt=True, refine=None, progress=False, **options):
+             dt=True, refine=None, progress=False, integrators='auto',
+             integrator_block='L1', name=None, **options):
     r"""Identify a sandwich system from input/output data.
 
     Parameters
     ----------
     u, y : array_like, shape (N,)
-        Measured input and output (the system starts at rest).
+        Measured input and output (the system starts at rest), in any
+        units: the result does not depend on them.
     na, nb, nc, nd : int
-        Orders of eq. (2.1); nb and nd count coefficients after
-        b0 = d0 = 1.
+        Orders of eq. (2.1); nb and nd count coefficients after b0 and
+        d0. na and nc count integrators too. The returned model has
+        exactly these orders.
     q1, q2 : int, optional
         Known delays (default 1).
     method : {'oe', 'rpem', 'bundle', 'gradient'}, optional
-        ``'oe'`` (default) is the library's best: two recursive passes,
-        the prediction-error estimator run series-parallel (``'rpem'``
-        with ``warmup=N``) and the paper's bundle method, each give the
-        start of a batch output-error refinement with multi-start
-        (`refine`); the lower output-error cost wins. ``'rpem'`` is the recursive
-        Gauss-Newton estimator alone; ``'bundle'`` and ``'gradient'`` are
-        the paper's method and its baseline. ``docs/algorithm.md`` gives
-        the measured table behind this default.
+        ``'oe'`` (default) is output-error identification started from the
+        linear output-error fit of the same total orders (module
+        documentation): it is never worse than that linear model.
+        ``'rpem'`` is the recursive Gauss-Newton estimator; ``'bundle'``
+        and ``'gradient'`` are the paper's method and its baseline.
     theta0 : array_like, optional
-        Starting point (order of eq. (2.5)).
+        Starting point of the recursive methods (order of eq. (2.5)).
     dt : float or True, optional
         Sampling time of the returned model.
     refine : bool or dict, optional
-        Follow the recursive estimate by `refine` (a dict gives its
-        keyword arguments). Default: True for ``'oe'`` (with
-        ``n_starts=8``), False otherwise.
+        Recursive methods only: follow the recursive estimate by `refine`
+        (a dict gives its keyword arguments). Default False.
     progress : bool, optional
-        Print progress to stderr on long runs.
+        Show progress bars (tqdm) on long runs.
+    integrators : int or 'auto', optional
+        ``'oe'`` only. Poles fixed at z = 1, e.g. 1 for a speed command in
+        and a position out. ``'auto'`` (default) decides from the linear
+        fit (AIC; only tried when it has a real pole above 0.9).
+    integrator_block : {'L1', 'L2'}, optional
+        Where the integrators go (default 'L1': in a drive the nut's
+        position integrates the speed before the play).
+    name : str, optional
+        Name of the identified model.
     **options
-        Options of the recursive method (see `RecursiveIdentifier`).
+        ``'oe'``: widths (relative backlash widths the starts open to,
+        default (0.05, 0.25)), screen_iter (8), keep (3), max_iter (200),
+        tol (1e-10), min_fit (5, percent). Recursive methods: see
+        `RecursiveIdentifier`.
 
     Returns
     -------
     IdentificationResult
-        With ``model`` (a normalised `SandwichSystem`), ``theta``,
-        ``history``, ``errors``, step ``counts``, ``success`` and
-        ``message``. After refinement also ``std``, ``fit`` and
-        ``recursive`` (the recursive pass's result).
+        ``model`` (a `SandwichSystem` in the data's units, b0 = 1 and
+        d0 = +-1), ``theta``, ``success`` and ``message``; for ``'oe'``
+        also ``fit``, ``cost``, ``std``, ``linear`` (the baseline),
+        ``significance`` (F-test of the backlash), ``whiteness`` and
+        ``integrators``. ``print(res)`` shows them at a glance.
+
+    Raises
+    ------
+    ValueError
+        On constant u or y, too few samples for the orders, or orders
+        that cannot be estimated.
 
     Warns
     -----
     RuntimeWarning
         If the data barely excite the backlash or a parameter is poorly
-        determined (large standard error), or if the estimate diverged.
+        determined (large standard error), or if a recursive estimate
+        diverged.
 
     Examples
     --------
@@ -77,64 +122,294 @@ def identify(u, y, na, nb, nc, nd, q1=1, q2=1, method='oe', theta0=None,
     >>> res = sw.identify(u, y, **plant.orders)
     >>> res.success, bool(sw.parameter_error(res.theta, plant.theta) < 1e-3)
     (True, True)
+    >>> res.fit > res.linear['fit']
+    True
     """
     u = check_signal('u', u)
     y = check_signal('y', y)
     if u.size != y.size:
         raise ValueError(f"u and y must have the same length; got "
                          f"{u.size} and {y.size} samples")
-    if np.ptp(u) == 0:
-        raise ValueError("u is constant; a constant input cannot excite "
-                         "the backlash or identify the dynamics. Use a "
-                         "persistently exciting input (e.g. noise, or "
-                         "steps plus sines)")
-    if method not in ('oe',) + tuple(DEFAULTS):
-        raise ValueError(f"method must be one of "
-                         f"{['oe'] + sorted(DEFAULTS)}; got {method!r}")
-    recursive = 'rpem' if method == 'oe' else method
-    if method == 'oe':
-        options = dict({'warmup': u.size}, **options)
-        if refine is None:
-            refine = {'n_starts': 8, 'seed': 0}
-    est = RecursiveIdentifier(na, nb, nc, nd, q1, q2, method=recursive,
-                              theta0=theta0, dt=dt, **options)
-    p = len(est.labels)
-    needed = 10 * p + padding(est._o)
+    _check_varying('u', u, "a constant input cannot excite the backlash "
+                   "or identify the dynamics. Use a persistently exciting "
+                   "input (e.g. noise, or steps plus sines)")
+    _check_varying('y', y, "there is nothing to identify (is the sensor "
+                   "connected, or the right channel selected?)")
+    methods = ('oe',) + tuple(DEFAULTS)
+    if not isinstance(method, str) or method not in methods:
+        raise ValueError(f"method must be one of {list(methods)}; got "
+                         f"{method!r}")
+    if name is not None and not isinstance(name, str):
+        raise TypeError(f"name must be a string or None; got "
+                        f"{type(name).__name__} {name!r}")
+    orders = {k: check_int(k, v) for k, v in
+              zip(('na', 'nb', 'nc', 'nd', 'q1', 'q2'),
+                  (na, nb, nc, nd, q1, q2))}
+    p = orders['na'] + orders['nb'] + orders['nc'] + orders['nd'] + 4
+    needed = 10 * p + padding(tuple(orders.values()))
     if u.size < needed:
         raise ValueError(
             f"u and y have {u.size} samples, too few for {p} parameters "
             f"with these orders and delays; give at least {needed}")
+    if method == 'oe':
+        if refine not in (None, True):
+            raise ValueError(f"refine applies to the recursive methods; "
+                             f"method='oe' always refines (got refine="
+                             f"{refine!r})")
+        if theta0 is not None:
+            raise ValueError("theta0 applies to the recursive methods; "
+                             "method='oe' starts from the linear fit")
+        result = _identify_oe(u, y, orders, dt, name, integrators,
+                              integrator_block, progress, options)
+    else:
+        result = _identify_recursive(u, y, orders, method, theta0, dt,
+                                     refine, progress, name, options)
+    _check_excitation(result, u)
+    return result
+
+
+def _check_varying(name, x, why):
+    if np.ptp(x) <= 1e-14 * np.max(np.abs(x)):
+        what = 'all zero' if not np.any(x) else f"all samples = {x[0]:.6g}"
+        raise ValueError(f"{name} is constant ({what}); {why}")
+
+
+def _oe_options(options):
+    unknown = set(options) - set(OE_DEFAULTS)
+    if unknown:
+        raise TypeError(f"unknown option(s) {sorted(unknown)} for "
+                        f"method='oe'; valid options are "
+                        f"{sorted(OE_DEFAULTS)}")
+    opt = dict(OE_DEFAULTS, **options)
+    widths = opt['widths']
+    if np.ndim(widths) != 1 or not all(
+            isinstance(w, numbers.Real) and 0 < w < 10 for w in widths):
+        raise ValueError(f"widths must be a sequence of relative widths in "
+                         f"(0, 10); got {widths!r}")
+    opt['widths'] = tuple(float(w) for w in widths)
+    opt['screen_iter'] = check_int('screen_iter', opt['screen_iter'], 1)
+    opt['keep'] = check_int('keep', opt['keep'], 1)
+    opt['max_iter'] = check_int('max_iter', opt['max_iter'], 1)
+    opt['tol'] = check_positive('tol', opt['tol'])
+    opt['min_fit'] = float(opt['min_fit'])
+    return opt
+
+
+def _integrator_split(k, orders, block):
+    if block not in ('L1', 'L2'):
+        raise ValueError(f"integrator_block must be 'L1' or 'L2'; got "
+                         f"{block!r}")
+    na, nc = orders['na'], orders['nc']
+    first, second = (na, nc) if block == 'L1' else (nc, na)
+    if k > na + nc:
+        raise ValueError(f"integrators = {k} exceed the na + nc = "
+                         f"{na + nc} poles of the structure")
+    i_first = min(k, first)
+    i_second = k - i_first
+    return (i_first, i_second) if block == 'L1' else (i_second, i_first)
+
+
+def _l1_std(st, phi, u):
+    """Standard deviation of x = L1[u] for the start phi (scaled data)."""
+    theta = st.theta(phi)
+    na, nb, nc, nd, q1, q2 = st.o
+    a = theta[nc:nc + na]
+    b = theta[nc + na + 4:nc + na + 4 + nb]
+    x = lfilter(np.r_[np.zeros(q1), 1.0, b], np.r_[1.0, a], u)
+    s = float(np.std(x))
+    return s if np.isfinite(s) and s > 0 else 1.0
+
+
+def _identify_oe(u, y, orders, dt, name, integrators, block, progress,
+                 options):
+    opt = _oe_options(options)
+    start = time.perf_counter()
+    if not (integrators == 'auto' or (isinstance(integrators,
+                                                 numbers.Integral)
+                                      and not isinstance(integrators, bool)
+                                      and integrators >= 0)):
+        raise ValueError(f"integrators must be an integer >= 0 or 'auto'; "
+                         f"got {integrators!r}")
+    _integrator_split(0, orders, block)            # checks `block`
+    o = orders
+    nf_l = o['na'] + o['nc']
+    if integrators != 'auto' and integrators > nf_l:
+        raise ValueError(f"integrators = {integrators} exceed the na + nc "
+                         f"= {nf_l} poles of the structure")
+    scaled = Problem(u, y, orders, dt=dt, name=name)
+    shape = (o['nb'] + o['nd'] + 1, nf_l, o['q1'] + o['q2'])
+    if integrators == 'auto':
+        free = _fit_oe(scaled.u, scaled.y, *shape, 0, opt['max_iter'],
+                       opt['tol'])
+        poles = np.roots(free['Ff']) if nf_l else np.zeros(0)
+        slow = bool(np.any((poles.real > 0.9) & (np.abs(poles.imag) < 0.1)))
+        linears = {0: free}
+        if slow:
+            linears[1] = _fit_oe(scaled.u, scaled.y, *shape, 1,
+                                 opt['max_iter'], opt['tol'])
+    else:
+        linears = {integrators: _fit_oe(scaled.u, scaled.y, *shape,
+                                        integrators, opt['max_iter'],
+                                        opt['tol'])}
+    fits = {k: _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt,
+                             name, progress)
+            for k, lin in linears.items()}
+    # several integrator counts: the lower AIC of the sandwich fits
+    n = u.size
+
+    def aic(k):
+        prob, out, _ = fits[k]
+        return n * np.log(max(out['cost'], 1e-300)) + 2 * prob.st.q
+
+    k = min(fits, key=aic)
+    prob, best, linear = fits[k]
+    if len(fits) > 1:
+        linear['message'] += (
+            f"; integrators='auto' chose {k} by AIC of the sandwich fits ("
+            + ', '.join(f"{j}: {aic(j):.6g}" for j in sorted(fits)) + ")")
+    res = prob.result(best, 'oe', linear=linear, min_fit=opt['min_fit'],
+                      extra={'elapsed': time.perf_counter() - start,
+                             'options': opt, 'n_starts': best['n_starts'],
+                             'theta0': None})
+    _warn_poorly_determined(res)
+    return res
+
+
+def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
+                  progress):
+    """The sandwich of `orders` with k integrators, from the linear fit
+    `lin` (on data scaled like `Problem`'s): (problem, best lm, linear)."""
+    nb_l, nf_l, nk_l = shape
+    i1, i2 = _integrator_split(k, orders, block)
+    sign = -1 if lin['B'][0] < 0 else 1
+    probs = {sign: Problem(u, y, orders, i1, i2, sign, dt, name)}
+    prob = probs[sign]
+    r_lin = y - lin['yhat'] * prob.sy
+    denom = np.linalg.norm(y - y.mean())
+    linear = {
+        'fit': float(100 * (1 - np.linalg.norm(r_lin) / denom)),
+        'cost': 0.5 * float(r_lin @ r_lin), 'cost_scaled': lin['cost'],
+        'n_params': nb_l + nf_l - k, 'integrators': k,
+        'model': oe_transfer_function(lin['B'] * prob.sy / prob.su,
+                                      lin['F'], nk_l, dt),
+        'converged': lin['converged'], 'message': lin['message']}
+    # exact sandwich starts of the linear fit, closed and opened
+    starts = [(sign, phi) for phi in splits(prob.st, sign * lin['B'],
+                                            lin['F'])]
+    B = lin['B']
+    if abs(B[0]) < 0.2 * np.max(np.abs(B)):
+        # the sign of a small leading coefficient is uncertain: also try
+        # the other sign, from the linear fit with that coefficient flipped
+        probs[-sign] = Problem(u, y, orders, i1, i2, -sign, dt, name)
+        flipped = B.copy()
+        flipped[0] = -B[0]
+        starts += [(-sign, phi) for phi in
+                   splits(probs[-sign].st, -sign * flipped, lin['F'])]
+    if not starts:
+        raise ValueError(
+            f"the linear fit of the total orders cannot be split into "
+            f"L1 (na = {orders['na']}, nb = {orders['nb']}) and L2 (nc = "
+            f"{orders['nc']}, nd = {orders['nd']})")
+    cands = []
+    for s, phi in starts:
+        st = probs[s].st
+        cands.append((s, phi))
+        width = _l1_std(st, phi, probs[s].u)
+        for w in opt['widths']:
+            opened = phi.copy()
+            opened[st.im + 2:st.im + 4] = w * width
+            cands.append((s, opened))
+    if not (k or orders['na'] == 0):
+        cands += _recursive_start(probs[sign], orders)
+    screened = []
+    for i in _progress_range(len(cands), progress, 'identify: starts'):
+        s, phi = cands[i]
+        p = probs[s]
+        out = lm(p.st, phi, p.u, p.y, opt['screen_iter'], opt['tol'])
+        out['sign'] = s
+        screened.append(out)
+    screened.sort(key=lambda out: out['cost'])
+    best = None
+    for out in screened[:opt['keep']]:
+        p = probs[out['sign']]
+        if not out['converged']:
+            out = dict(lm(p.st, out['phi'], p.u, p.y, opt['max_iter'],
+                          opt['tol']), sign=out['sign'])
+        if best is None or out['cost'] < best['cost']:
+            best = out
+    if best['cost'] > lin['cost'] or not np.isfinite(best['cost']):
+        # the linear model itself, as a sandwich with a closed backlash:
+        # a sandwich fit is never worse than the linear fit it nests
+        best = _linear_as_sandwich(probs[sign], lin, u)
+    best['n_starts'] = len(cands)
+    return probs[best['sign']], best, linear
+
+
+def _linear_as_sandwich(prob, lin, u):
+    """The exact closed-backlash sandwich of the linear fit, as an `lm`
+    output (the zero radius of its structure lifted to hold the linear
+    fit's zeros)."""
+    st = prob.st
+    st.zero_radius = np.inf
+    phi = splits(st, prob.sign * lin['B'], lin['F'])[0]
+    out = lm(st, phi, prob.u, prob.y, max_iter=1)
+    out['sign'] = prob.sign
+    out['converged'] = True
+    out['message'] = ("no sandwich start improved on the linear fit: the "
+                      "model is the linear fit with a closed backlash")
+    return out
+
+
+def _recursive_start(prob, orders):
+    """A start from the recursive prediction-error estimator run
+    series-parallel over the scaled data (a different basin than the
+    linear fit's; skipped if it fails)."""
+    st = prob.st
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter('ignore')
+            est = RecursiveIdentifier(*orders.values(), method='rpem',
+                                      warmup=prob.u.size)
+            est.update_many(prob.u, prob.y)
+        phi = _admissible_start(st, st.phi(est.theta), 1e-9)
+    except (ValueError, RuntimeError, np.linalg.LinAlgError):
+        return []
+    if not st.stable(phi):
+        return []
+    return [(prob.sign, phi)]
+
+
+def _identify_recursive(u, y, orders, method, theta0, dt, refine, progress,
+                        name, options):
+    est = RecursiveIdentifier(*orders.values(), method=method,
+                              theta0=theta0, dt=dt, **options)
     start = time.perf_counter()
     step = max(u.size // 20, 1)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter('always')
-        for lo in range(0, u.size, step):
+        for lo in _progress_range(u.size, progress, method, step):
             est.update_many(u[lo:lo + step], y[lo:lo + step])
-            if progress:
-                _progress(recursive, est.n_samples, u.size, start)
             if est.diverged_at is not None:
                 break
     for w in caught:
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     result = est.result(elapsed=time.perf_counter() - start)
+    if not stable_and_finite(result.theta, est._o):
+        result.success = False
+        result.message += ("; the estimate is unstable or not finite (a "
+                           "pole of L1 or L2 on or outside the unit circle)")
     if refine:
         kwargs = refine if isinstance(refine, dict) else {}
         refined = _refine(result.model, u, y, progress=progress, **kwargs)
-        if method == 'oe':
-            # a second, independent start: the paper's bundle method
-            # (series-parallel, robust but biased under noise)
-            with warnings.catch_warnings():
-                warnings.simplefilter('ignore', RuntimeWarning)
-                alt = identify(u, y, na, nb, nc, nd, q1, q2,
-                               method='bundle', dt=dt, refine=kwargs)
-            if alt.cost < refined.cost:
-                refined = alt
         refined.recursive = result
         refined.history = result.history
-        refined.method = f"{recursive}+refine" if method != 'oe' else 'oe'
+        refined.method = f"{method}+refine"
         refined.elapsed = time.perf_counter() - start
         result = refined
-    _check_excitation(result, u)
+    if name is not None:
+        m = result.model
+        result.model = type(m)(m.L1, m.backlash, m.L2, name=name,
+                               orders=m.orders)
     return result
 
 
@@ -156,19 +431,3 @@ def _check_excitation(result, u):
             f"excite it, so m1, m2, D1, D2 are unreliable (is the input "
             f"amplitude smaller than the dead band?)", RuntimeWarning,
             stacklevel=3)
-
-
-def _progress(method, done, total, start):
-    import sys
-    elapsed = time.perf_counter() - start
-    left = elapsed / done * (total - done) if done else 0.0
-    text = (f"{method:>9}: {done}/{total} samples, {elapsed:5.1f}s elapsed, "
-            f"~{left:4.1f}s left")
-    if sys.stderr.isatty():
-        bar = '#' * int(30 * done / total)
-        sys.stderr.write(f"\r{method:>9}: [{bar:<30}] " + text[11:])
-        if done >= total:
-            sys.stderr.write('\n')
-    elif done >= total or (20 * done // total) % 5 == 0:
-        sys.stderr.write(text + '\n')       # a line every 25% in logs
-    sys.stderr.flush()

@@ -7,6 +7,7 @@ identified `SandwichSystem` in ``model``. The recursive estimators
 """
 
 import numpy as np
+from scipy import stats
 from scipy.optimize import OptimizeResult
 
 __all__ = ['IdentificationResult', 'parameter_error']
@@ -42,6 +43,69 @@ def parameter_error(theta_hat, theta_true):
             / np.linalg.norm(theta_true))
 
 
+def backlash_significance(cost_linear, cost_sandwich, n_linear, n_sandwich,
+                          n_samples):
+    """F-test of the sandwich against the linear model it nests.
+
+    With D1 = D2 = 0 and m1 = m2 the sandwich is the linear model, so the
+    extra ``n_sandwich - n_linear`` parameters (the backlash) can be
+    tested: ``F = ((C_lin - C_sw) / extra) / (C_sw / (N - n_sandwich))``,
+    with C the sums of squared residuals.
+
+    Returns
+    -------
+    dict
+        ``F``, ``p_value`` (small: the backlash explains the data
+        significantly better than the linear model) and ``extra``.
+
+    Examples
+    --------
+    >>> from sandwichctl.identification.result import backlash_significance
+    >>> out = backlash_significance(2.0, 1.0, 5, 8, 1000)
+    >>> round(out['F'], 1), out['p_value'] < 1e-6
+    (330.7, True)
+    """
+    extra = max(int(n_sandwich) - int(n_linear), 1)
+    dof = max(int(n_samples) - int(n_sandwich), 1)
+    if not cost_sandwich > 0:
+        return {'F': np.inf, 'p_value': 0.0, 'extra': extra}
+    F = max(cost_linear - cost_sandwich, 0.0) / extra / (cost_sandwich / dof)
+    return {'F': float(F), 'p_value': float(stats.f.sf(F, extra, dof)),
+            'extra': extra}
+
+
+def whiteness(residuals, lags=20):
+    """Residual whiteness summary: autocorrelation against its 99% band.
+
+    Returns
+    -------
+    dict
+        ``lags``, ``outside`` (how many of lags 1..lags fall outside
+        +-2.58/sqrt(N)), ``Q`` (Ljung-Box statistic) and ``p_value``
+        (small: the residuals are not white, so the model leaves dynamics
+        unexplained or the noise is coloured).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sandwichctl.identification.result import whiteness
+    >>> w = whiteness(np.random.default_rng(0).standard_normal(2000))
+    >>> w['outside'] <= 1, w['p_value'] > 0.01
+    (True, True)
+    """
+    r = np.asarray(residuals, dtype=float)
+    r = r - r.mean()
+    n = r.size
+    lags = int(min(lags, n - 1))
+    denom = float(r @ r)
+    if lags < 1 or not denom > 0:
+        return {'lags': 0, 'outside': 0, 'Q': 0.0, 'p_value': 1.0}
+    rho = np.array([r[:-k] @ r[k:] for k in range(1, lags + 1)]) / denom
+    Q = float(n * (n + 2) * np.sum(rho ** 2 / (n - np.arange(1, lags + 1))))
+    return {'lags': lags,
+            'outside': int(np.sum(np.abs(rho) > 2.58 / np.sqrt(n))),
+            'Q': Q, 'p_value': float(stats.chi2.sf(Q, lags))}
+
 
 class IdentificationResult(OptimizeResult):
     """Result of `identify` (a `scipy.optimize.OptimizeResult`).
@@ -49,7 +113,8 @@ class IdentificationResult(OptimizeResult):
     Attributes
     ----------
     model : SandwichSystem
-        The identified, normalised model (b0 = d0 = 1).
+        The identified model in the data's units, normalised with b0 = 1
+        and d0 = +1 or -1 (the sign of its gain, `SandwichSystem.gain_sign`).
     theta : ndarray
         Final estimate, order of eq. (2.5); names in `theta_labels`.
     history : ndarray, shape (N, p)
@@ -61,12 +126,23 @@ class IdentificationResult(OptimizeResult):
         Numbers of long, short, null and stop steps (and skipped samples
         of the gradient method).
     success : bool
-        False if the estimate diverged or the method failed.
+        True only if the model is finite and stable (poles on the unit
+        circle only where integrators were declared or identified), the
+        optimiser converged, and, for the batch methods, the model
+        explains the data: a fit clearly above 0 and not below the linear
+        baseline. ``message`` says which test failed.
     message : str
         What happened.
     method, options, orders, theta0, nit, elapsed
         The method, its options, the orders, the start, the number of
         samples or iterations, and the wall time in seconds.
+    fit, cost, std, linear, significance, whiteness
+        Batch methods only: the fit (percent, as MATLAB's ``compare``) and
+        output-error cost on the estimation data, the parameters'
+        standard errors, the linear output-error baseline of the same
+        total orders (a dict with ``fit``, ``cost``, ``model``), the
+        backlash's F-test against it (`backlash_significance`) and the
+        residual whiteness summary (`whiteness`).
     """
 
     def __repr__(self):
@@ -76,9 +152,38 @@ class IdentificationResult(OptimizeResult):
         if getattr(self, 'counts', None):
             lines.append('  steps: ' + ', '.join(
                 f"{k} {v}" for k, v in self.counts.items() if v))
-        lines.append('  theta: ' + ', '.join(
-            f"{name}={val:.4g}" for name, val in
-            zip(self.theta_labels, self.theta)))
+        if getattr(self, 'fit', None) is not None:
+            text = f"  fit on the estimation data: {self.fit:.2f} %"
+            lin = getattr(self, 'linear', None)
+            if lin is not None:
+                text += (f"; linear output-error baseline (same total "
+                         f"orders): {lin['fit']:.2f} %")
+            lines.append(text)
+        sig = getattr(self, 'significance', None)
+        if sig:
+            lines.append(f"  backlash significance: F = {sig['F']:.4g} on "
+                         f"{sig['extra']} extra parameters, p = "
+                         f"{sig['p_value']:.2g}"
+                         + (" (significant)" if sig['p_value'] < 0.01
+                            else " (not significant: a linear model "
+                                 "explains these data as well)"))
+        white = getattr(self, 'whiteness', None)
+        if white and white['lags']:
+            lines.append(f"  residuals: {white['outside']} of "
+                         f"{white['lags']} autocorrelation lags outside the "
+                         f"99% band (Ljung-Box p = {white['p_value']:.2g})")
+        std = getattr(self, 'std', None)
+        if std is None:
+            lines.append('  theta: ' + ', '.join(
+                f"{name}={val:.4g}" for name, val in
+                zip(self.theta_labels, self.theta)))
+        else:
+            lines.append('  parameters (estimate +- standard error; * poorly '
+                         'determined):')
+            for name, val, sd in zip(self.theta_labels, self.theta, std):
+                flag = ' *' if not (sd <= 0.5 * max(abs(val), 1e-12)) \
+                    else ''
+                lines.append(f"    {name:>4} = {val: .6g} +- {sd:.2g}{flag}")
         return '\n'.join(lines)
 
     __str__ = __repr__

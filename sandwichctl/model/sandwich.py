@@ -87,7 +87,8 @@ class SandwichSystem(ct.InterconnectedSystem):
             0.4   , -0.05  ])
     """
 
-    def __init__(self, L1, backlash, L2, name=None, inputs='u', outputs='y'):
+    def __init__(self, L1, backlash, L2, name=None, inputs='u', outputs='y',
+                 orders=None):
         num1, den1 = check_discrete_siso_tf('L1', L1)
         num2, den2 = check_discrete_siso_tf('L2', L2)
         if not isinstance(backlash, Backlash):
@@ -99,6 +100,9 @@ class SandwichSystem(ct.InterconnectedSystem):
         self._L1, self._L2 = L1, L2
         self._coef1 = _difference_coefficients(num1, den1)
         self._coef2 = _difference_coefficients(num2, den2)
+        if orders is not None:
+            self._coef1, self._coef2 = _declare_orders(
+                orders, self._coef1, self._coef2)
         bl = Backlash(backlash.m1, backlash.m2, backlash.D1, backlash.D2,
                       dt=dt, name='backlash')
         self._backlash_values = bl._values
@@ -156,53 +160,71 @@ class SandwichSystem(ct.InterconnectedSystem):
                 'nd': d.size - 1, 'q1': q1, 'q2': q2}
 
     @property
+    def gain_sign(self):
+        """Sign of the overall gain, +1 or -1 (the sign of b0 * d0).
+
+        The backlash has positive slopes, so the sign of the whole
+        sandwich is the sign of the product of the leading coefficients of
+        L1 and L2.
+        """
+        return 1 if self._coef1[1][0] * self._coef2[1][0] > 0 else -1
+
+    @property
     def is_normalized(self):
-        """True if b0 = d0 = 1 (the unique representation of Section 2)."""
-        return self._coef1[1][0] == 1.0 and self._coef2[1][0] == 1.0
+        """True if b0 = 1 and d0 = +1 or -1 (the signed normalisation)."""
+        return self._coef1[1][0] == 1.0 and abs(self._coef2[1][0]) == 1.0
 
     def normalized(self):
-        """Equivalent system with b0 = d0 = 1 (Sections 2 and 5).
+        """Equivalent system with b0 = 1 and d0 = ±1 (Sections 2 and 5).
 
         The gains are absorbed into the backlash: with ``x = b0 x'`` and
         ``y = L2'[d0 v]``, the slopes become ``m * abs(b0) * abs(d0)`` and
         the thresholds ``D / abs(b0)``. If b0 < 0 the mirror symmetry
         ``B(m1, m2, D1, D2)(-x) = -B(m2, m1, D2, D1)(x)`` swaps the two
-        lines. From
-        zero initial state, the output is the same as the original's.
+        lines. The sign of the overall gain stays in d0 (`gain_sign`): a
+        positive-gain system gets the paper's b0 = d0 = 1, a negative-gain
+        one b0 = 1, d0 = -1. From zero initial state, the output is the
+        same as the original's; the name, the signal names and the
+        declared orders are kept.
 
-        Raises
-        ------
-        ValueError
-            If b0 * d0 < 0: a backlash with positive slopes cannot absorb a
-            negative overall gain.
+        Examples
+        --------
+        >>> import control as ct, sandwichctl as sw
+        >>> plant = sw.SandwichSystem(ct.tf([0.5, 0], [1, -0.5], 1),
+        ...                           sw.Backlash(1, 1, 0.2, 0.2),
+        ...                           ct.tf([-2], [1, 0.3], 1), name='axis')
+        >>> norm = plant.normalized()
+        >>> norm.coefficients['d'], norm.gain_sign, norm.name
+        (array([-1.]), -1, 'axis')
         """
         co = self.coefficients
         b0, d0 = co['b'][0], co['d'][0]
-        if b0 * d0 < 0:
-            raise ValueError(
-                f"cannot normalise to b0 = d0 = 1: b0 = {b0:g} and "
-                f"d0 = {d0:g} have opposite signs, and a backlash with "
-                f"positive slopes cannot absorb a negative gain")
         m1, m2, D1, D2 = co['m1'], co['m2'], co['D1'], co['D2']
         if b0 < 0:
             m1, m2, D1, D2 = m2, m1, D2, D1
         sb, sd = abs(b0), abs(d0)
         return SandwichSystem.from_coefficients(
-            a=co['a'], b=co['b'] / b0, c=co['c'], d=co['d'] / d0,
+            a=co['a'], b=co['b'] / b0, c=co['c'],
+            d=co['d'] / sd * (1.0 if b0 > 0 else -1.0),
             m1=m1 * sb * sd, m2=m2 * sb * sd, D1=D1 / sb, D2=D2 / sb,
-            q1=co['q1'], q2=co['q2'], dt=self.dt)
+            q1=co['q1'], q2=co['q2'], dt=self.dt, name=self.name,
+            inputs=self.input_labels[0], outputs=self.output_labels[0])
 
     @property
     def theta(self):
         """Parameter vector of eq. (2.5) of the normalised system.
 
         Order: c1..c_nc, a1..a_na, m1, m2, D1, D2, b1..b_nb, d1..d_nd.
+        For a positive gain this is the paper's theta (b0 = d0 = 1). For a
+        negative gain (`gain_sign` = -1) it is the same vector of the
+        signed normalisation b0 = 1, d0 = -1, where the d_j are relative
+        to d0; ``from_theta(theta, ..., sign=-1)`` rebuilds the system.
         """
         sys = self if self.is_normalized else self.normalized()
         co = sys.coefficients
         return np.concatenate([co['c'], co['a'],
                                [co['m1'], co['m2'], co['D1'], co['D2']],
-                               co['b'][1:], co['d'][1:]])
+                               co['b'][1:], co['d'][1:] * co['d'][0]])
 
     @property
     def theta_labels(self):
@@ -212,7 +234,7 @@ class SandwichSystem(ct.InterconnectedSystem):
 
     @classmethod
     def from_coefficients(cls, a, b, c, d, m1, m2, D1, D2, q1=1, q2=1,
-                          dt=True, name=None):
+                          dt=True, name=None, inputs='u', outputs='y'):
         """Build a sandwich from the coefficients of eqs. (2.1)-(2.2).
 
         Parameters
@@ -233,6 +255,11 @@ class SandwichSystem(ct.InterconnectedSystem):
             Sampling time (default True: discrete, unspecified).
         name : str, optional
             System name.
+        inputs, outputs : str, optional
+            Names of the input and output signals.
+
+        The orders are those of the given coefficient arrays, zeros
+        included (see `SandwichSystem`'s ``orders``).
 
         Examples
         --------
@@ -245,12 +272,15 @@ class SandwichSystem(ct.InterconnectedSystem):
         """
         L1 = _tf_from_coefficients('a', a, 'b', b, 'q1', q1, dt)
         L2 = _tf_from_coefficients('c', c, 'd', d, 'q2', q2, dt)
-        return cls(L1, Backlash(m1, m2, D1, D2, dt=dt), L2, name=name)
+        orders = {'na': np.size(a), 'nb': np.size(b) - 1, 'nc': np.size(c),
+                  'nd': np.size(d) - 1}
+        return cls(L1, Backlash(m1, m2, D1, D2, dt=dt), L2, name=name,
+                   inputs=inputs, outputs=outputs, orders=orders)
 
     @classmethod
     def from_theta(cls, theta, na, nb, nc, nd, q1=1, q2=1, dt=True,
-                   name=None):
-        """Build the normalised sandwich (b0 = d0 = 1) from eq. (2.5).
+                   name=None, sign=1):
+        """Build the normalised sandwich (b0 = 1, d0 = sign) from eq. (2.5).
 
         The inverse of `theta`: ``SandwichSystem.from_theta(sys.theta,
         **sys.orders, dt=sys.dt)`` is ``sys.normalized()``.
@@ -267,14 +297,18 @@ class SandwichSystem(ct.InterconnectedSystem):
             Sampling time.
         name : str, optional
             System name.
+        sign : {1, -1}, optional
+            Sign of the overall gain (default 1: the paper's b0 = d0 = 1).
         """
+        if isinstance(sign, bool) or sign not in (1, -1):
+            raise ValueError(f"sign must be 1 or -1; got {sign!r}")
         na, nb, nc, nd = (check_int(n, v) for n, v in
                           zip(('na', 'nb', 'nc', 'nd'), (na, nb, nc, nd)))
         theta = check_vector('theta', theta, nc + na + 4 + nb + nd)
         c, a = theta[:nc], theta[nc:nc + na]
         m1, m2, D1, D2 = theta[nc + na:nc + na + 4]
         b = np.concatenate([[1.0], theta[nc + na + 4:nc + na + 4 + nb]])
-        d = np.concatenate([[1.0], theta[nc + na + 4 + nb:]])
+        d = sign * np.concatenate([[1.0], theta[nc + na + 4 + nb:]])
         return cls.from_coefficients(a, b, c, d, m1, m2, D1, D2, q1, q2,
                                      dt=dt, name=name)
 
@@ -383,6 +417,32 @@ def theta_labels(na, nb, nc, nd):
             + [f"d{i}" for i in range(1, nd + 1)])
 
 
+def _declare_orders(orders, coef1, coef2):
+    """Pad the coefficients of eq. (2.1) with zeros up to declared orders."""
+    if not isinstance(orders, dict):
+        raise TypeError(f"orders must be a dict with na, nb, nc, nd; got "
+                        f"{type(orders).__name__}")
+    unknown = set(orders) - {'na', 'nb', 'nc', 'nd', 'q1', 'q2'}
+    if unknown:
+        raise ValueError(f"orders has unknown keys {sorted(unknown)}; "
+                         f"expected na, nb, nc, nd (q1, q2)")
+    out = []
+    for (a, b, q), (na, nb, qn) in ((coef1, ('na', 'nb', 'q1')),
+                                    (coef2, ('nc', 'nd', 'q2'))):
+        n_a = check_int(na, orders.get(na, a.size))
+        n_b = check_int(nb, orders.get(nb, b.size - 1))
+        if qn in orders and check_int(qn, orders[qn]) != q:
+            raise ValueError(f"orders[{qn!r}] = {orders[qn]} but the "
+                             f"transfer function has a delay of {q}")
+        if n_a < a.size or n_b < b.size - 1:
+            raise ValueError(
+                f"declared orders {na} = {n_a}, {nb} = {n_b} are smaller "
+                f"than the transfer function's ({a.size}, {b.size - 1})")
+        out.append((np.concatenate([a, np.zeros(n_a - a.size)]),
+                    np.concatenate([b, np.zeros(n_b + 1 - b.size)]), q))
+    return out[0], out[1]
+
+
 def _difference_coefficients(num, den):
     """(a, b, q) of eq. (2.1) from normalised descending num, den."""
     q = den.size - num.size
@@ -392,6 +452,7 @@ def _difference_coefficients(num, den):
 
 
 def _tf_from_coefficients(aname, a, bname, b, qname, q, dt):
+    """Transfer function in descending powers of z of eq. (2.1)."""
     a = np.atleast_1d(np.asarray(a, dtype=float)) if np.size(a) else \
         np.zeros(0)
     b = np.atleast_1d(np.asarray(b, dtype=float))

@@ -185,9 +185,10 @@ def section6_run(n_samples=6700, n_validation=4000, seed=0, methods=None,
     for label, (method, options) in methods.items():
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter('always')
-            res = identify(u, y, **plant.orders, method=method,
-                           theta0=examples.XY_STAGE_THETA0, dt=dt,
-                           progress=progress, **options)
+            start = ({} if method == 'oe'
+                     else {'theta0': examples.XY_STAGE_THETA0})
+            res = identify(u, y, **plant.orders, method=method, dt=dt,
+                           progress=progress, **start, **options)
         results[label] = res
         issued[label] = [str(w.message) for w in caught]
         validation[label] = validate(res.model, u_val, y_val)

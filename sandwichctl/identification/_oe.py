@@ -1,0 +1,246 @@
+r"""Output-error fitting of a sandwich structure (private).
+
+The batch identifiers (`refine`, `identify`) minimise the output-error
+cost (2.6) in a *reduced* parameter vector phi of a `Structure`:
+
+- the data are scaled by the caller (u / su, s y / sy), so the numbers the
+  optimiser sees do not depend on the data's units, and the sign s of the
+  overall gain is taken out of the parameters (the backlash slopes stay
+  positive);
+- poles fixed at z = 1 (integrators) are factored out of L1's or L2's
+  denominator, ``A(q) = (1 - q^-1)^i A'(q)``, so that only A' is free and
+  only A' must stay stable.
+
+The full parameter vector of eq. (2.5), theta, is the affine image
+``theta = t0 + T phi``: the Jacobian of the simulated output with respect
+to phi is ``J_theta T``. Levenberg-Marquardt steps are solved as box QPs
+(m1, m2 >= m_min, D1, D2 >= 0); a step is accepted only if the cost
+decreases and the free denominators stay stable, which copes with the
+kinks of the cost (see `refine`).
+"""
+
+import numpy as np
+
+from ._predictor import simulate_with_sensitivities, oe_output, is_stable
+from ._qp import box_qp, QPError
+
+__all__ = []
+
+#: Free poles are kept inside |z| < 1 - STABILITY_MARGIN.
+STABILITY_MARGIN = 1e-4
+#: Zeros of L1 and L2 are kept inside |z| < ZERO_RADIUS (or the start's
+#: largest zero times 1.5, if larger): with b0 = d0 = 1 a zero escaping to
+#: infinity trades for a vanishing slope m and a growing width D, a
+#: degenerate valley that looks like one more sample of delay.
+ZERO_RADIUS = 20.0
+
+
+def integrator_poly(i):
+    """Coefficients of (1 - q^-1)^i, ascending powers of q^-1."""
+    p = np.ones(1)
+    for _ in range(i):
+        p = np.convolve(p, [1.0, -1.0])
+    return p
+
+
+class Structure:
+    """Orders, delays and integrators of a sandwich; the map phi -> theta.
+
+    Parameters
+    ----------
+    na, nb, nc, nd, q1, q2 : int
+        Orders of eq. (2.1), integrators included in na and nc.
+    i1, i2 : int
+        Poles fixed at z = 1 in L1 and L2.
+    """
+
+    def __init__(self, na, nb, nc, nd, q1, q2, i1=0, i2=0,
+                 zero_radius=ZERO_RADIUS):
+        if not (0 <= i1 <= na and 0 <= i2 <= nc):
+            raise ValueError(f"integrators ({i1}, {i2}) exceed the orders "
+                             f"na = {na}, nc = {nc}")
+        self.o = (na, nb, nc, nd, q1, q2)
+        self.i1, self.i2 = i1, i2
+        self.p = nc + na + 4 + nb + nd
+        self.q = self.p - i1 - i2
+        self.nc_free, self.na_free = nc - i2, na - i1
+        self.im = self.nc_free + self.na_free      # m1 in phi
+        self.im_theta = nc + na                    # m1 in theta
+        self.zero_radius = zero_radius
+        self.t0 = self._affine(np.zeros(self.q))
+        self.T = np.column_stack([self._affine(e) - self.t0
+                                  for e in np.eye(self.q)]) if self.q else \
+            np.zeros((self.p, 0))
+
+    def _affine(self, phi):
+        c_free, a_free = phi[:self.nc_free], phi[self.nc_free:self.im]
+        c = np.convolve(np.r_[1.0, c_free], integrator_poly(self.i2))[1:]
+        a = np.convolve(np.r_[1.0, a_free], integrator_poly(self.i1))[1:]
+        return np.concatenate([c, a, phi[self.im:]])
+
+    def theta(self, phi):
+        """Full parameter vector of eq. (2.5)."""
+        return self.t0 + self.T @ phi
+
+    def phi(self, theta):
+        """Reduced vector of a theta whose denominators hold the
+        integrators (their remainder after division is dropped)."""
+        na, nb, nc, nd = self.o[:4]
+        c, a = theta[:nc], theta[nc:nc + na]
+        c_free = np.polydiv(np.r_[1.0, c], integrator_poly(self.i2))[0]
+        a_free = np.polydiv(np.r_[1.0, a], integrator_poly(self.i1))[0]
+        return np.concatenate([c_free[1:], a_free[1:], theta[nc + na:]])
+
+    def stable(self, phi):
+        """Finite, the free denominators strictly stable and the zeros
+        inside `zero_radius`."""
+        nb, nd = self.o[1], self.o[3]
+        ib = self.im + 4
+        margin = 1.0 - self.zero_radius
+        return (self.poles_stable(phi)
+                and is_stable(phi, ib, nb, margin)
+                and is_stable(phi, ib + nb, nd, margin))
+
+    def poles_stable(self, phi):
+        """Finite, and the free denominators strictly stable."""
+        return (bool(np.all(np.isfinite(phi)))
+                and is_stable(phi, 0, self.nc_free, STABILITY_MARGIN)
+                and is_stable(phi, self.nc_free, self.na_free,
+                              STABILITY_MARGIN))
+
+    def widen_zero_radius(self, phi):
+        """Let the zeros of a start be admissible: radius >= 1.5 max|z|."""
+        nb, nd = self.o[1], self.o[3]
+        ib = self.im + 4
+        for start, n in ((ib, nb), (ib + nb, nd)):
+            if n:
+                z = np.roots(np.r_[1.0, phi[start:start + n]])
+                self.zero_radius = max(self.zero_radius,
+                                       1.5 * float(np.max(np.abs(z))))
+
+    def bounds(self, phi, m_min):
+        """Box for a step d: m + d >= m_min, D + d >= 0."""
+        lo = np.full(self.q, -np.inf)
+        hi = np.full(self.q, np.inf)
+        im = self.im
+        lo[im:im + 2] = m_min - phi[im:im + 2]
+        lo[im + 2:im + 4] = -phi[im + 2:im + 4]
+        return lo, hi
+
+    def clip(self, phi, m_min):
+        phi = phi.copy()
+        im = self.im
+        phi[im:im + 2] = np.maximum(phi[im:im + 2], m_min)
+        phi[im + 2:im + 4] = np.maximum(phi[im + 2:im + 4], 0.0)
+        return phi
+
+    def cost(self, phi, u, y, sp=False):
+        """Output-error cost 0.5 * sum(r^2) (inf if not finite); with
+        ``sp`` the series-parallel prediction error instead."""
+        with np.errstate(all='ignore'):
+            if sp:
+                r = self.jacobian(phi, u, y, sp)[0]
+            else:
+                r = y - oe_output(self.theta(phi), self.o, u)
+            c = 0.5 * float(r @ r)
+        return c if np.isfinite(c) else np.inf
+
+    def jacobian(self, phi, u, y, sp=False):
+        """(residuals, Jacobian of y_hat w.r.t. phi, zones)."""
+        with np.errstate(all='ignore'):
+            yhat, J, zones = simulate_with_sensitivities(
+                self.theta(phi), self.o, u, y if sp else None)
+        return y - yhat, J @ self.T, zones
+
+
+def _step(A, g, lo, hi):
+    """Minimise 0.5 d'A d - g'd over lo <= d <= hi (None if it fails).
+
+    The unconstrained minimiser is tried first (the bounds rarely bind);
+    piqp solves the box QP otherwise.
+    """
+    try:
+        d = np.linalg.solve(A, g)
+        if np.all(np.isfinite(d)) and np.all(d >= lo) and np.all(d <= hi):
+            return d
+    except np.linalg.LinAlgError:
+        pass
+    try:
+        return box_qp(A, -g, lo, hi)
+    except QPError:
+        return None
+
+
+def lm(st, phi, u, y, max_iter=100, tol=1e-10, m_min=1e-9, sp=False,
+       fixed=None):
+    """Levenberg-Marquardt on the output-error cost, from an admissible phi.
+
+    Every accepted step lowers the cost and keeps the structure stable, so
+    the final cost is at most the starting cost. With ``sp`` the
+    series-parallel prediction error is minimised instead (a smoother
+    cost, biased under noise: a way to a start). ``fixed`` (a boolean
+    mask) holds some parameters at their values. Returns a dict with phi,
+    cost, J, r, nit, converged and message.
+    """
+    free = np.ones(phi.size, bool) if fixed is None else ~np.asarray(fixed)
+    r, J, _ = st.jacobian(phi, u, y, sp)
+    cost = 0.5 * float(r @ r)
+    if not (np.isfinite(cost) and np.all(np.isfinite(J))):
+        return dict(phi=phi, cost=np.inf if not np.isfinite(cost) else cost,
+                    J=J, r=r, nit=0, converged=False,
+                    message="the start does not give a finite output and "
+                            "Jacobian")
+    mu = 1e-3
+    message, converged = f"stopped at max_iter = {max_iter}", False
+    last_decrease = np.inf
+    it = 0
+    for it in range(1, max_iter + 1):
+        Jf = J[:, free]
+        A = Jf.T @ Jf
+        g = Jf.T @ r
+        diag = np.diag(A).copy()
+        scale = np.maximum(diag, 1e-12 * max(float(np.max(diag, initial=0)),
+                                             1e-300))
+        lo, hi = st.bounds(phi, m_min)
+        lo, hi = lo[free], hi[free]
+        accepted = False
+        while mu < 1e12:
+            d = _step(A + mu * np.diag(scale), g, lo, hi)
+            if d is None:
+                mu *= 10
+                continue
+            full = np.zeros(phi.size)
+            full[free] = d
+            trial = st.clip(phi + full, m_min)
+            if not st.stable(trial):
+                mu *= 10
+                continue
+            cost_t = st.cost(trial, u, y, sp)
+            if cost_t < cost:
+                accepted = True
+                break
+            mu *= 10
+        if not accepted:
+            message = ("converged: no step decreases the cost (a minimum, "
+                       "possibly at a kink)")
+            converged = True
+            break
+        last_decrease = (cost - cost_t) / max(cost, 1e-300)
+        step = np.linalg.norm(trial - phi)
+        phi = trial
+        r, J, _ = st.jacobian(phi, u, y, sp)
+        cost = 0.5 * float(r @ r)
+        mu = max(mu / 3, 1e-9)
+        if not np.all(np.isfinite(J)):
+            message = "stopped: the Jacobian is not finite"
+            break
+        if last_decrease < tol or step < tol * (1 + np.linalg.norm(phi)):
+            message = (f"converged: relative decrease {last_decrease:.1e} "
+                       f"or step {step:.1e} below tol")
+            converged = True
+            break
+    if not converged and last_decrease < 1e-6:
+        converged = True
+        message += f" (last relative decrease {last_decrease:.1e}: converged)"
+    return dict(phi=phi, cost=cost, J=J, r=r, nit=it, converged=converged,
+                message=message)
