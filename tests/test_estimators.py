@@ -90,7 +90,7 @@ def test_multistart_never_worse_than_single_start():
         **plant.orders)
     one = sw.refine(start, u, y)
     many = sw.refine(start, u, y, n_starts=4, seed=1)
-    assert many.cost <= one.cost
+    assert many.cost <= one.cost * (1 + 1e-12)      # to rounding
 
 
 def test_oe_default_meets_the_noise_free_goal():

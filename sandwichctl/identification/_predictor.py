@@ -21,7 +21,7 @@ Two predictors are provided.
     zone. The past outputs y*(k-i) are either measured (series-parallel)
     or the stored predictions (parallel), see `identify`.
 
-``oe_step`` (exact output-error sensitivities)
+``oe_steps`` (exact output-error sensitivities)
     Sensitivities of the simulated output carried recursively through
     L1's dynamics, through the backlash (including its memory zone, where
     dv(k)/dtheta = dv(k-1)/dtheta) and through L2's dynamics.
@@ -160,64 +160,78 @@ def store_state(theta, o, u, ystar_src, xs, vs, zs, ys, k, grad):
 
 
 @numba.njit(cache=True)
-def oe_step(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k, ymeas=None):
-    """One step of the output-error (simulation) model with sensitivities.
+def oe_steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1, past,
+             parallel):
+    """Samples k0..k1-1 of the output-error model with sensitivities.
 
     Computes x_hat(k), v_hat(k), zone(k), y_hat(k) from the stored past
     and their exact derivatives with respect to theta, Sx[k], Sv[k],
     Sy[k] (rows of p entries), carried recursively through L1, the
-    backlash memory and L2. Returns y_hat(k).
+    backlash memory and L2. Returns y_hat(k1 - 1). (The loop over samples
+    lives here, not in the callers, so that a whole record runs without a
+    function call per sample.)
 
-    If `ymeas` is given, L2's AR part uses the measured past outputs
-    instead (series-parallel); then Sy has no recursion through L2's
-    poles, but the L1 and backlash sensitivities stay exact.
+    L2's AR part reads its past outputs from `past`: ``ys`` itself with
+    ``parallel=True`` (output error), or the measured outputs with
+    ``parallel=False`` (series-parallel); then Sy has no recursion through
+    L2's poles, but the L1 and backlash sensitivities stay exact.
     """
     na, nb, nc, nd, q1, q2 = o
     ia, im, ib, idd = _idx(o)
     m1, m2, D1, D2 = theta[im], theta[im + 1], theta[im + 2], theta[im + 3]
     p = theta.size
-    # L1, eq. (2.1)
-    x = l1_output(theta, o, u, xs, k)
-    xs[k] = x
-    for r in range(p):
-        acc = 0.0
+    y = 0.0
+    for k in range(k0, k1):
+        # L1, eq. (2.1); rows are updated whole (contiguous) for speed
+        x = l1_output(theta, o, u, xs, k)
+        xs[k] = x
+        rx = Sx[k]
+        for r in range(p):
+            rx[r] = 0.0
         for i in range(1, na + 1):
-            acc -= theta[ia + i - 1] * Sx[k - i, r]
-        Sx[k, r] = acc
-    for i in range(1, na + 1):
-        Sx[k, ia + i - 1] -= xs[k - i]
-    for j in range(1, nb + 1):
-        Sx[k, ib + j - 1] += u[k - q1 - j]
-    # backlash, eq. (2.2)
-    v, zone = backlash_step(x, xs[k - 1], vs[k - 1], m1, m2, D1, D2)
-    vs[k] = v
-    zs[k] = zone
-    if zone == 0:
+            ai = theta[ia + i - 1]
+            prev = Sx[k - i]
+            for r in range(p):
+                rx[r] -= ai * prev[r]
+            rx[ia + i - 1] -= xs[k - i]
+        for j in range(1, nb + 1):
+            rx[ib + j - 1] += u[k - q1 - j]
+        # backlash, eq. (2.2)
+        v, zone = backlash_step(x, xs[k - 1], vs[k - 1], m1, m2, D1, D2)
+        vs[k] = v
+        zs[k] = zone
+        rv = Sv[k]
+        if zone == 0:
+            prev = Sv[k - 1]
+            for r in range(p):
+                rv[r] = prev[r]
+        else:
+            m = m1 if zone == 1 else m2
+            for r in range(p):
+                rv[r] = m * rx[r]
+            add_direct_partials(rv, 1.0, zone, x, m1, m2, D1, D2, im)
+        # L2, eq. (2.1)
+        y = l2_output(theta, o, vs, past, k)
+        ys[k] = y
+        ry = Sy[k]
         for r in range(p):
-            Sv[k, r] = Sv[k - 1, r]
-    else:
-        m = m1 if zone == 1 else m2
-        for r in range(p):
-            Sv[k, r] = m * Sx[k, r]
-        add_direct_partials(Sv[k], 1.0, zone, x, m1, m2, D1, D2, im)
-    # L2, eq. (2.1)
-    parallel = ymeas is None
-    past = ys if parallel else ymeas
-    y = l2_output(theta, o, vs, past, k)
-    ys[k] = y
-    for r in range(p):
-        acc = 0.0
+            ry[r] = 0.0
         if parallel:
             for i in range(1, nc + 1):
-                acc -= theta[i - 1] * Sy[k - i, r]
+                ci = theta[i - 1]
+                prev = Sy[k - i]
+                for r in range(p):
+                    ry[r] -= ci * prev[r]
         for j in range(nd + 1):
             dj = 1.0 if j == 0 else theta[idd + j - 1]
-            acc += dj * Sv[k - q2 - j, r]
-        Sy[k, r] = acc
-    for i in range(1, nc + 1):
-        Sy[k, i - 1] -= past[k - i]
-    for j in range(1, nd + 1):
-        Sy[k, idd + j - 1] += vs[k - q2 - j]
+            prev = Sv[k - q2 - j]
+            for r in range(p):
+                ry[r] += dj * prev[r]
+        for i in range(1, nc + 1):
+            ry[i - 1] -= past[k - i]
+        for j in range(1, nd + 1):
+            ry[idd + j - 1] += vs[k - q2 - j]
+
     return y
 
 
@@ -260,16 +274,15 @@ def stable_and_finite(theta, o):
 
 @numba.njit(cache=True)
 def oe_simulate(theta, o, u, pad, xs, vs, zs, ys, Sx, Sv, Sy):
-    """Run `oe_step` over a whole padded record (fixed theta)."""
-    for k in range(pad, u.size):
-        oe_step(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k)
+    """Run `oe_steps` over a whole padded record (fixed theta)."""
+    oe_steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, pad, u.size, ys, True)
 
 
 @numba.njit(cache=True)
 def sp_simulate(theta, o, u, ymeas, pad, xs, vs, zs, ys, Sx, Sv, Sy):
     """`oe_simulate` with L2's past outputs measured (series-parallel)."""
-    for k in range(pad, u.size):
-        oe_step(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k, ymeas)
+    oe_steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, pad, u.size, ymeas,
+             False)
 
 
 @numba.njit(cache=True)
@@ -287,7 +300,7 @@ def _oe_output_padded(theta, o, u, pad, xs, vs, ys):
 def oe_output(theta, o, u):
     """Simulated output y_hat (no sensitivities), from zero state.
 
-    The same recursion as `oe_step` without the derivatives: the cheap
+    The same recursion as `oe_steps` without the derivatives: the cheap
     cost evaluation of a trial step.
     """
     pad = padding(o)
@@ -322,4 +335,4 @@ def simulate_with_sensitivities(theta, o, u, ymeas=None):
         yp = np.zeros(pad + n)
         yp[pad:] = ymeas
         sp_simulate(theta, o, up, yp, pad, xs, vs, zs, ys, Sx, Sv, Sy)
-    return ys[pad:].copy(), Sy[pad:].copy(), zs[pad:].copy()
+    return ys[pad:], Sy[pad:], zs[pad:]

@@ -12,12 +12,15 @@ and null steps, and stores the new estimate's internal signals.
 import numba
 import numpy as np
 
-from ._predictor import (window_predict, store_state, oe_step,
+from ._predictor import (window_predict, store_state, oe_steps,
                          stable_and_finite, _idx)
 
 __all__ = []
 
 LONG, SHORT, NULL, STOP, SKIP = 0, 1, 2, 3, 4
+#: Step kind of the gradient method: an update at a nonsmooth sample, taken
+#: with the Clarke subgradient of the zone eq. (2.2) selects.
+SUBGRADIENT = 9
 
 
 @numba.njit(cache=True)
@@ -71,11 +74,15 @@ def bundle_prepare(theta, trials, ntrial, s, o, u, ystar, y, xs, vs, zs, k,
 @numba.njit(cache=True)
 def bundle_finish(theta, lam, H, beta, n, f0, e0, o, u, ystar, y, xs, vs,
                   zs, ys, k, eta0, eta_max, rho, n_ls, q, q_star, gamma,
-                  delta, step_bound, m_min, theta_new, trial, t, grad):
+                  delta, step_bound, m_min, theta_new, trial, t, grad,
+                  full_step_test=False):
     """Direction, line search and step classification (Steps 2-3).
 
     Writes the new estimate into `theta_new` and the new trial point into
-    `trial`. Returns (kind, eta, phi).
+    `trial`. Returns (kind, eta, phi). With `full_step_test`, a step found
+    with eta >= eta0 is long only if eq. (3.9), read literally, holds:
+    f(k, theta + t) < f(k, theta); otherwise the backtracking goes on
+    below eta0 (a short or null step).
     """
     p = theta.size
     for r in range(p):
@@ -117,7 +124,33 @@ def bundle_finish(theta, lam, H, beta, n, f0, e0, o, u, ystar, y, xs, vs,
                 f_new = f_try
                 break
             eta *= rho
-    if accepted and eta >= eta0 * (1.0 - 1e-12):
+    long_ok = True
+    if accepted and eta >= eta0 * (1.0 - 1e-12) and full_step_test:
+        for r in range(p):                                # eq. (3.9)
+            trial[r] = theta[r] + t[r]
+        project(trial, o, m_min)
+        f_full, _ = _cost(trial, o, u, ystar, y, xs, vs, zs, k, grad)
+        if not f_full < f0:
+            # no long step: go on backtracking below eta0 (short or null)
+            long_ok = False
+            accepted = False
+            for _ in range(n_ls):
+                eta *= rho
+                if eta >= eta0 * (1.0 - 1e-12):
+                    continue
+                for r in range(p):
+                    theta_new[r] = theta[r] + eta * t[r]
+                project(theta_new, o, m_min)
+                f_try, _ = _cost(theta_new, o, u, ystar, y, xs, vs, zs, k,
+                                 grad)
+                tried = eta
+                if f_try <= f0 + q * eta * phi:
+                    accepted = True
+                    f_new = f_try
+                    break
+            if not accepted:
+                theta_new[:] = theta
+    if accepted and long_ok and eta >= eta0 * (1.0 - 1e-12):
         trial[:] = theta_new                              # long step
         return LONG, eta, phi
     if accepted:
@@ -158,10 +191,11 @@ def gradient_run(theta, o, u, y, series_parallel, xs, vs, zs, ys, k0, k1,
                  mu, skip_nonsmooth, m_min, history, errors, kinds, grad):
     """The traditional gradient method over samples k0..k1-1.
 
-    theta(k+1) = theta(k) + mu e(k) w(k), with the update skipped at
-    nonsmooth samples (a zone switch in the predictor window) when
-    `skip_nonsmooth`. Returns the index of the first non-finite estimate,
-    or -1.
+    theta(k+1) = theta(k) + mu e(k) w(k). At a nonsmooth sample (a zone
+    switch in the predictor window) the update is skipped (kind SKIP) when
+    `skip_nonsmooth`, and otherwise taken with w the gradient of the zone
+    eq. (2.2) selects, a Clarke subgradient (kind SUBGRADIENT). Returns
+    the index of the first non-finite estimate, or -1.
     """
     for k in range(k0, k1):
         ystar = y if series_parallel else ys
@@ -172,7 +206,7 @@ def gradient_run(theta, o, u, y, series_parallel, xs, vs, zs, ys, k0, k1,
         if nonsmooth and skip_nonsmooth:
             kinds[k] = SKIP
         else:
-            kinds[k] = LONG
+            kinds[k] = SUBGRADIENT if nonsmooth else LONG
             for r in range(theta.size):
                 theta[r] += mu * e * grad[r]
             project(theta, o, m_min)
@@ -193,7 +227,7 @@ def rpem_run(theta, P, o, u, y, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1,
              err_limit, history, errors, kinds, psi, Ppsi, dtheta, trial):
     """Recursive prediction-error (Gauss-Newton) estimator, samples k0..k1-1.
 
-    Output-error predictor with exact recursive sensitivities (`oe_step`);
+    Output-error predictor with exact recursive sensitivities (`oe_steps`);
     for the first `warmup` samples the predictor is series-parallel.
     Forgetting factor lam(k) = lam0 lam(k-1) + 1 - lam0 (lam_state[0]).
     Safeguards: the step is limited to `max_step` (2-norm); it is halved
@@ -207,9 +241,11 @@ def rpem_run(theta, P, o, u, y, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1,
     for k in range(k0, k1):
         sp = (n_before + k - k0) < warmup
         if sp:
-            yhat = oe_step(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k, y)
+            yhat = oe_steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k,
+                            k + 1, y, False)
         else:
-            yhat = oe_step(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k)
+            yhat = oe_steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k,
+                            k + 1, ys, True)
         e = y[k] - yhat
         errors[k] = e
         kind = RPEM_OK

@@ -43,7 +43,7 @@ __all__ = ['identify']
 
 #: Options of method='oe' and their defaults.
 OE_DEFAULTS = dict(widths=(0.05, 0.25), screen_iter=8, keep=3, max_iter=200,
-                   tol=1e-10, min_fit=MIN_FIT)
+                   tol=1e-10, min_fit=MIN_FIT, sp_iter=15)
 
 def identify(u, y, na, nb, nc, nd, q1=1, q2=1, method='oe', theta0=None,
              dt=True, refine=None, progress=False, integrators='auto',
@@ -188,6 +188,7 @@ def _oe_options(options):
                          f"(0, 10); got {widths!r}")
     opt['widths'] = tuple(float(w) for w in widths)
     opt['screen_iter'] = check_int('screen_iter', opt['screen_iter'], 1)
+    opt['sp_iter'] = check_int('sp_iter', opt['sp_iter'], 0)
     opt['keep'] = check_int('keep', opt['keep'], 1)
     opt['max_iter'] = check_int('max_iter', opt['max_iter'], 1)
     opt['tol'] = check_positive('tol', opt['tol'])
@@ -312,13 +313,20 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
             f"{orders['nc']}, nd = {orders['nd']})")
     cands = []
     for s, phi in starts:
-        st = probs[s].st
+        p = probs[s]
         cands.append((s, phi))
-        width = _l1_std(st, phi, probs[s].u)
+        width = _l1_std(p.st, phi, p.u)
         for w in opt['widths']:
             opened = phi.copy()
-            opened[st.im + 2:st.im + 4] = w * width
+            opened[p.st.im + 2:p.st.im + 4] = w * width
             cands.append((s, opened))
+            if opt['sp_iter']:
+                # the series-parallel cost (measured past outputs in L2)
+                # is smoother and exact without noise: its minimum is a
+                # start in another basin
+                out = lm(p.st, opened, p.u, p.y, opt['sp_iter'], sp=True)
+                if p.st.stable(out['phi']):
+                    cands.append((s, out['phi']))
     if not (k or orders['na'] == 0):
         cands += _recursive_start(probs[sign], orders)
     screened = []

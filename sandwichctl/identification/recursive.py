@@ -15,7 +15,11 @@ Methods
 ``'gradient'``
     The traditional gradient method the paper compares against:
     theta(k+1) = theta(k) + mu e(k) w(k) with step ``mu`` (0.009 in
-    Section 5), skipping the nonsmooth samples.
+    Section 5). The paper "omits" the nonsmooth points; option
+    ``nonsmooth`` chooses the reading: ``'skip'`` (default) skips the
+    update at every sample whose predictor window switches zone, and
+    ``'subgradient'`` updates there too, with the Clarke subgradient of
+    the zone eq. (2.2) selects.
 
 The interpretations of the places where the paper is loose are listed in
 ``docs/algorithm.md``; each is an option named after the paper's symbol.
@@ -29,8 +33,9 @@ import numpy as np
 from ._predictor import padding, store_state
 from ._qp import simplex_qp, QPError
 from ._recursive import (bundle_prepare, bundle_finish, gradient_run,
-                         rpem_run, LONG, SHORT, NULL, STOP, SKIP, RPEM_OK,
-                         RPEM_LIMITED, RPEM_REJECTED, RPEM_RESET)
+                         rpem_run, LONG, SHORT, NULL, STOP, SKIP,
+                         SUBGRADIENT, RPEM_OK, RPEM_LIMITED, RPEM_REJECTED,
+                         RPEM_RESET)
 from .result import IdentificationResult
 from ..model.sandwich import SandwichSystem, theta_labels
 from .._checks import (check_int, check_positive, check_nonnegative,
@@ -40,20 +45,23 @@ __all__ = ['RecursiveIdentifier']
 
 
 _KIND_NAMES = {LONG: 'long', SHORT: 'short', NULL: 'null', STOP: 'stop',
-               SKIP: 'skip', RPEM_LIMITED: 'limited',
+               SKIP: 'skip', SUBGRADIENT: 'subgradient',
+               RPEM_LIMITED: 'limited',
                RPEM_REJECTED: 'rejected', RPEM_RESET: 'reset', RPEM_OK: 'ok'}
 
 _KINDS_OF = {'bundle': ('long', 'short', 'null', 'stop'),
              'gradient': ('long', 'skip'),
+             'gradient/subgradient': ('long', 'subgradient'),
              'rpem': ('ok', 'limited', 'rejected', 'reset')}
 
 #: Default options of each recursive method (paper symbols where defined).
 DEFAULTS = {
     'bundle': dict(eta0=0.015, k1=6, delta=1e-4, q=0.1, q_star=0.5,
                    gamma=0.5, eta_max=None, rho=0.5, n_ls=10,
-                   step_bound=False, predictor='series-parallel',
-                   m_min=1e-6, divergence_limit=1e6),
-    'gradient': dict(mu=0.009, skip_nonsmooth=True,
+                   step_bound=False, full_step_test=False,
+                   predictor='series-parallel', m_min=1e-6,
+                   divergence_limit=1e6),
+    'gradient': dict(mu=0.009, nonsmooth='skip', skip_nonsmooth=None,
                      predictor='series-parallel', m_min=1e-6,
                      divergence_limit=1e6),
     'rpem': dict(lam0=0.99, lam_start=0.95, P0=10.0, p_max=1e6,
@@ -93,7 +101,9 @@ def _check_options(method, options):
                                              opt['divergence_limit'])
     if method == 'gradient':
         opt['mu'] = check_positive('mu', opt['mu'])
-        opt['skip_nonsmooth'] = bool(opt['skip_nonsmooth'])
+        reading = _nonsmooth_reading(options)
+        opt['nonsmooth'] = reading
+        opt['skip_nonsmooth'] = reading == 'skip'
         return opt
     opt['k1'] = check_int('k1', opt['k1'], minimum=1)
     eta0 = check_positive('eta0', opt['eta0'])
@@ -122,7 +132,34 @@ def _check_options(method, options):
     opt['rho'] = rho
     opt['n_ls'] = check_int('n_ls', opt['n_ls'], minimum=0)
     opt['step_bound'] = bool(opt['step_bound'])
+    opt['full_step_test'] = bool(opt['full_step_test'])
     return opt
+
+
+#: Readings of "the nonsmooth points are omitted" (Section 5) for the
+#: gradient baseline, see `RecursiveIdentifier`.
+NONSMOOTH_READINGS = ('skip', 'subgradient')
+
+
+def _nonsmooth_reading(options):
+    """The gradient method's reading from `nonsmooth` / `skip_nonsmooth`.
+
+    ``skip_nonsmooth`` (True/False) is the older spelling of ``nonsmooth``
+    ('skip'/'subgradient'); both may be given only if they agree.
+    """
+    reading = options.get('nonsmooth', 'skip')
+    if reading not in NONSMOOTH_READINGS:
+        raise ValueError(f"nonsmooth must be one of {NONSMOOTH_READINGS}; "
+                         f"got {reading!r}")
+    old = options.get('skip_nonsmooth')
+    if old is None:
+        return reading
+    implied = 'skip' if bool(old) else 'subgradient'
+    if 'nonsmooth' in options and reading != implied:
+        raise ValueError(
+            f"skip_nonsmooth={old} means nonsmooth={implied!r}, but "
+            f"nonsmooth={reading!r} was given; pass only nonsmooth")
+    return implied
 
 
 class RecursiveIdentifier:
@@ -135,9 +172,10 @@ class RecursiveIdentifier:
         b0 = d0 = 1).
     q1, q2 : int, optional
         Known delays of L1 and L2 (default 1).
-    method : {'bundle', 'gradient'}, optional
-        The paper's bundle method (default) or the traditional gradient
-        method; see the module documentation.
+    method : {'bundle', 'gradient', 'rpem'}, optional
+        The paper's bundle method (default), the traditional gradient
+        method, or the recursive prediction-error method; see the module
+        documentation.
     theta0 : array_like, optional
         Starting point in the order of eq. (2.5). Default: zeros for the
         linear coefficients and 0.1 for m1, m2, D1, D2 (as in Section 5).
@@ -149,10 +187,18 @@ class RecursiveIdentifier:
     **options
         Method options. ``'bundle'``: eta0 (0.015), k1 (6), delta (1e-4),
         q (0.1), q_star (0.5), gamma (0.5), eta_max (None: = eta0), rho
-        (0.5), n_ls (10), step_bound (False), predictor
-        ('series-parallel'), m_min (1e-6), divergence_limit (1e6).
-        ``'gradient'``: mu (0.009), skip_nonsmooth (True), predictor,
-        m_min, divergence_limit. See ``docs/algorithm.md``.
+        (0.5), n_ls (10), step_bound (False: True caps eta by Theorem
+        4.1's bound (4.1)-(4.2)), full_step_test (False: True makes a
+        long step also require eq. (3.9) read literally, f(k, theta + t)
+        < f(k, theta)), predictor ('series-parallel'), m_min (1e-6),
+        divergence_limit (1e6).
+        ``'gradient'``: mu (0.009), nonsmooth ('skip' or 'subgradient',
+        default 'skip'; the older ``skip_nonsmooth=True/False`` means the
+        same), predictor, m_min, divergence_limit. See
+        ``docs/algorithm.md`` and ``docs/reproduction.md``.
+        ``'rpem'``: lam0 (0.99), lam_start (0.95), P0 (10), p_max (1e6),
+        max_step (0.5), warmup (0), m_min, err_limit (1e6),
+        divergence_limit.
 
     Examples
     --------
@@ -165,6 +211,22 @@ class RecursiveIdentifier:
     ...     e = est.update(uk, yk)
     >>> est.theta.shape
     (9,)
+
+    The gradient baseline under its two readings of "the nonsmooth points
+    are omitted": ``'skip'`` leaves the estimate unchanged at a nonsmooth
+    sample, ``'subgradient'`` updates there with a Clarke subgradient; the
+    counts say how often each happened.
+
+    >>> skip = sw.RecursiveIdentifier(**plant.orders, method='gradient')
+    >>> sub = sw.RecursiveIdentifier(**plant.orders, method='gradient',
+    ...                              nonsmooth='subgradient')
+    >>> _ = skip.update_many(u, y), sub.update_many(u, y)
+    >>> sorted(skip.result().counts), sorted(sub.result().counts)
+    (['long', 'skip'], ['long', 'subgradient'])
+    >>> skipped = skip.result().counts['skip']
+    >>> subgradient = sub.result().counts['subgradient']
+    >>> skipped > 0, subgradient > 0
+    (True, True)
     """
 
     def __init__(self, na, nb, nc, nd, q1=1, q2=1, method='bundle',
@@ -219,6 +281,13 @@ class RecursiveIdentifier:
             self._H = np.zeros((k1, p))
             self._beta = np.zeros(k1)
             self._work = [np.zeros(p) for _ in range(3)]
+
+    @property
+    def _kinds_key(self):
+        if (self.method == 'gradient'
+                and self.options['nonsmooth'] == 'subgradient'):
+            return 'gradient/subgradient'
+        return self.method
 
     @property
     def theta(self):
@@ -378,7 +447,8 @@ class RecursiveIdentifier:
                 self._xs, self._vs, self._zs, self._ys, k, opt['eta0'],
                 opt['eta_max'], opt['rho'], opt['n_ls'], opt['q'],
                 opt['q_star'], opt['gamma'], opt['delta'], opt['step_bound'],
-                opt['m_min'], theta_new, trial, t, grad)
+                opt['m_min'], theta_new, trial, t, grad,
+                opt['full_step_test'])
             if self._diverged(theta_new):
                 self._flag_divergence(self.n_samples + k - k0)
                 return k - k0
@@ -415,7 +485,7 @@ class RecursiveIdentifier:
             model=self.model, theta=self.theta, history=hist,
             errors=np.array(self._err), kinds=np.array(self._kind, int),
             counts={k: v for k, v in self.counts.items()
-                    if k in _KINDS_OF[self.method]},
+                    if k in _KINDS_OF[self._kinds_key]},
             success=success, message=message,
             method=self.method, options=dict(self.options),
             orders=dict(self.orders), theta_labels=list(self.labels),
