@@ -29,6 +29,7 @@ import warnings
 
 import numpy as np
 from scipy.signal import lfilter
+from tqdm.auto import tqdm
 
 from ._nested import splits
 from ._oe import lm
@@ -43,7 +44,8 @@ __all__ = ['identify']
 
 #: Options of method='oe' and their defaults.
 OE_DEFAULTS = dict(widths=(0.05, 0.25), screen_iter=8, keep=3, max_iter=200,
-                   tol=1e-10, min_fit=MIN_FIT, sp_iter=15)
+                   tol=1e-10, min_fit=MIN_FIT, sp_iter=15, sp_starts=4,
+                   n_random=6, seed=0)
 
 def identify(u, y, na, nb, nc, nd, q1=1, q2=1, method='oe', theta0=None,
              dt=True, refine=None, progress=False, integrators='auto',
@@ -189,6 +191,9 @@ def _oe_options(options):
     opt['widths'] = tuple(float(w) for w in widths)
     opt['screen_iter'] = check_int('screen_iter', opt['screen_iter'], 1)
     opt['sp_iter'] = check_int('sp_iter', opt['sp_iter'], 0)
+    opt['sp_starts'] = check_int('sp_starts', opt['sp_starts'], 0)
+    opt['n_random'] = check_int('n_random', opt['n_random'], 0)
+    opt['seed'] = check_int('seed', opt['seed'], 0)
     opt['keep'] = check_int('keep', opt['keep'], 1)
     opt['max_iter'] = check_int('max_iter', opt['max_iter'], 1)
     opt['tol'] = check_positive('tol', opt['tol'])
@@ -311,7 +316,8 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
             f"the linear fit of the total orders cannot be split into "
             f"L1 (na = {orders['na']}, nb = {orders['nb']}) and L2 (nc = "
             f"{orders['nc']}, nd = {orders['nd']})")
-    cands = []
+    # stage 1: the linear fit's splits, closed and opened, briefly
+    cands, widest = [], []
     for s, phi in starts:
         p = probs[s]
         cands.append((s, phi))
@@ -320,23 +326,34 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
             opened = phi.copy()
             opened[p.st.im + 2:p.st.im + 4] = w * width
             cands.append((s, opened))
-            if opt['sp_iter']:
-                # the series-parallel cost (measured past outputs in L2)
-                # is smoother and exact without noise: its minimum is a
-                # start in another basin
-                out = lm(p.st, opened, p.u, p.y, opt['sp_iter'], sp=True)
-                if p.st.stable(out['phi']):
-                    cands.append((s, out['phi']))
+        widest.append(cands[-1])
+    bar = _progress(progress, len(cands) + len(widest) + opt['sp_starts']
+                    + opt['n_random'] + 1 + opt['keep'])
+    screened = _screen(cands, probs, opt['screen_iter'] // 2, opt, bar)
+    # stage 2: starts in other basins, through the series-parallel cost
+    # (measured past outputs in L2: smoother, and exact without noise):
+    # from every split opened widest, from the best screened starts, from
+    # random structures, and from the recursive prediction-error estimator
+    others = []
+    if opt['sp_iter']:
+        rng = np.random.default_rng(opt['seed'])
+        seeds = widest + [(out['sign'], out['phi'])
+                          for out in screened[:opt['sp_starts']]]
+        seeds += [(sign, _random_start(probs[sign].st, probs[sign].u, rng))
+                  for _ in range(opt['n_random'])]
+        for s, phi in seeds:
+            p = probs[s]
+            out = lm(p.st, phi, p.u, p.y, opt['sp_iter'], sp=True)
+            if p.st.stable(out['phi']):
+                others.append((s, out['phi']))
+            bar.update()
     if not (k or orders['na'] == 0):
-        cands += _recursive_start(probs[sign], orders)
-    screened = []
-    for i in _progress_range(len(cands), progress, 'identify: starts'):
-        s, phi = cands[i]
-        p = probs[s]
-        out = lm(p.st, phi, p.u, p.y, opt['screen_iter'], opt['tol'])
-        out['sign'] = s
-        screened.append(out)
-    screened.sort(key=lambda out: out['cost'])
+        others += _recursive_start(probs[sign], orders)
+    bar.update()
+    screened = sorted(screened[:opt['keep']]
+                      + _screen(others, probs, opt['screen_iter'], opt, None),
+                      key=lambda out: out['cost'])
+    # stage 3: the best to convergence
     best = None
     for out in screened[:opt['keep']]:
         p = probs[out['sign']]
@@ -345,6 +362,9 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
                           opt['tol']), sign=out['sign'])
         if best is None or out['cost'] < best['cost']:
             best = out
+        bar.update()
+    bar.close()
+    cands += others
     if best['cost'] > lin['cost'] or not np.isfinite(best['cost']):
         # the linear model itself, as a sandwich with a closed backlash:
         # a sandwich fit is never worse than the linear fit it nests
@@ -366,6 +386,61 @@ def _linear_as_sandwich(prob, lin, u):
     out['message'] = ("no sandwich start improved on the linear fit: the "
                       "model is the linear fit with a closed backlash")
     return out
+
+
+def _screen(cands, probs, iterations, opt, bar):
+    """A few LM iterations from each (sign, phi); sorted by cost."""
+    out = []
+    for s, phi in cands:
+        p = probs[s]
+        res = lm(p.st, phi, p.u, p.y, iterations, opt['tol'])
+        res['sign'] = s
+        out.append(res)
+        if bar is not None:
+            bar.update()
+    return sorted(out, key=lambda res: res['cost'])
+
+
+def _random_roots(n, rng, radius=0.9):
+    """n roots, real or in conjugate pairs, uniform in the disk."""
+    roots = []
+    while len(roots) < n:
+        r = radius * np.sqrt(rng.random())
+        if n - len(roots) >= 2 and rng.random() < 0.5:
+            a = rng.uniform(0, np.pi)
+            roots += [r * np.exp(1j * a), r * np.exp(-1j * a)]
+        else:
+            roots.append(r * rng.choice([-1.0, 1.0]) + 0j)
+    return np.array(roots)
+
+
+def _random_start(st, u, rng):
+    """A random admissible structure: poles and zeros in the disk, the
+    slopes scaled to the spread of x, a random backlash width."""
+    na, nb, nc, nd = st.o[:4]
+    poly = [np.real(np.poly(_random_roots(n, rng)))[1:] if n else
+            np.zeros(0) for n in (st.nc_free, st.na_free, nb, nd)]
+    phi = np.concatenate([poly[0], poly[1], [1.0, 1.0, 0.0, 0.0], poly[2],
+                          poly[3]])
+    width = _l1_std(st, phi, u)
+    phi[st.im:st.im + 2] = 1.0 / width
+    phi[st.im + 2:st.im + 4] = rng.uniform(0.05, 0.8) * width
+    return phi
+
+
+class _NoBar:
+    def update(self, n=1):
+        pass
+
+    def close(self):
+        pass
+
+
+def _progress(progress, total):
+    """A tqdm bar over the starts when asked for, else a do-nothing one."""
+    if not progress:
+        return _NoBar()
+    return tqdm(total=total, desc='identify: starts', leave=False)
 
 
 def _recursive_start(prob, orders):
