@@ -28,6 +28,10 @@ __all__ = []
 
 #: Free poles are kept inside |z| < 1 - STABILITY_MARGIN.
 STABILITY_MARGIN = 1e-4
+#: A run stopped at max_iter counts as converged when its last decrease
+#: and the Gauss-Newton prediction of what is left are both below this
+#: share of the output's energy (the fit would change in its sixth digit).
+CONVERGED = 1e-6
 #: Zeros of L1 and L2 are kept inside |z| < ZERO_RADIUS (or the start's
 #: largest zero times 1.5, if larger): with b0 = d0 = 1 a zero escaping to
 #: infinity trades for a vanishing slope m and a growing width D, a
@@ -239,8 +243,25 @@ def lm(st, phi, u, y, max_iter=100, tol=1e-10, m_min=1e-9, sp=False,
                        f"or step {step:.1e} below tol")
             converged = True
             break
-    if not converged and last_decrease < 1e-6:
-        converged = True
-        message += f" (last relative decrease {last_decrease:.1e}: converged)"
+    if not converged and np.isfinite(cost) and np.all(np.isfinite(J)):
+        # stopped at max_iter: converged if what is left is negligible, by
+        # the last step and by the Gauss-Newton model of the cost
+        Jf = J[:, free]
+        g = Jf.T @ r
+        A = Jf.T @ Jf
+        with np.errstate(all='ignore'):
+            d = np.linalg.lstsq(A, g, rcond=1e-12)[0]
+        predicted = 0.5 * float(g @ d) / max(cost, 1e-300)
+        # what is left, relative to the output's energy: a change of the
+        # fit in the sixth digit is not worth more iterations
+        energy = 0.5 * float(np.sum((y - np.mean(y)) ** 2))
+        share = cost / max(energy, 1e-300)
+        if max(last_decrease, predicted) * share < CONVERGED:
+            converged = True
+            message += (f" (last relative decrease {last_decrease:.1e}, "
+                        f"predicted {predicted:.1e}: converged)")
+        else:
+            message += (f" (last relative decrease {last_decrease:.1e}, "
+                        f"predicted {predicted:.1e})")
     return dict(phi=phi, cost=cost, J=J, r=r, nit=it, converged=converged,
                 message=message)

@@ -357,9 +357,8 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
     best = None
     for out in screened[:opt['keep']]:
         p = probs[out['sign']]
-        if not out['converged']:
-            out = dict(lm(p.st, out['phi'], p.u, p.y, opt['max_iter'],
-                          opt['tol']), sign=out['sign'])
+        out = dict(lm(p.st, out['phi'], p.u, p.y, opt['max_iter'],
+                      opt['tol']), sign=out['sign'])
         if best is None or out['cost'] < best['cost']:
             best = out
         bar.update()
