@@ -1,12 +1,16 @@
-"""Section 5 claims, measured over 10 seeds (issue 3).
+"""Section 5 claims, measured over several seeds (issues 3 and 14).
 
 For the paper's bundle method and the traditional gradient baseline, with
-the Section 5 settings, noise-free and at SNR 46.5 (variance ratio), this
-prints the normalised parameter error ||theta_hat - theta|| / ||theta|| at
-2k, 5k, 10k and 20k samples, the number of samples after which the error
-stays under 5%, and the cost per sample (median over seeds). The gradient
-baseline is shown both with the nonsmooth samples skipped (the paper's
-description) and without skipping.
+the Section 5 settings, noise-free and at "SNR 46.5" under its three
+readings (variance ratio, amplitude ratio, dB; `sw.examples.add_noise`),
+this prints the normalised parameter error ||theta_hat - theta|| /
+||theta|| at 2k, 5k, 10k and 20k samples, the number of samples after
+which the error stays under 5%, and the cost per sample (median over
+seeds). The gradient baseline is shown under both readings of "the
+nonsmooth points are omitted": ``nonsmooth='skip'`` (the default) and
+``nonsmooth='subgradient'``, at the paper's step mu = 0.009 and, for the
+subgradient reading, also at mu = 0.005 (at 0.009 it diverges on most
+records; see docs/reproduction.md).
 
 Run: python benchmarks/bench_section5.py [--seeds 10] [--samples 20000]
 """
@@ -14,6 +18,7 @@ Run: python benchmarks/bench_section5.py [--seeds 10] [--samples 20000]
 import argparse
 import os
 import sys
+import warnings
 
 import numpy as np
 
@@ -22,6 +27,11 @@ import sandwichctl as sw                                   # noqa: E402
 from _timing import print_table                            # noqa: E402
 
 CHECKPOINTS = (2000, 5000, 10000, 20000)
+
+CASES = (('noise-free', None, 'variance'),
+         ('SNR 46.5 (variance ratio)', 46.5, 'variance'),
+         ('SNR 46.5 (amplitude ratio)', 46.5, 'amplitude'),
+         ('SNR 46.5 dB', 46.5, 'db'))
 
 
 def settle(err, level=0.05):
@@ -37,22 +47,19 @@ def main():
     ap.add_argument('--seeds', type=int, default=10)
     ap.add_argument('--samples', type=int, default=20000)
     args = ap.parse_args()
-    methods = {
-        'bundle': ('bundle', sw.paper.section5.PAPER_SETTINGS['bundle']),
-        'gradient': ('gradient', sw.paper.section5.PAPER_SETTINGS['gradient']),
-        'gradient, no skip': ('gradient', dict(
-            sw.paper.section5.PAPER_SETTINGS['gradient'], skip_nonsmooth=False)),
-    }
+    methods = dict(sw.paper.section5.METHODS)
+    methods['gradient/subgradient, mu=0.005'] = (
+        'gradient', dict(mu=0.005, nonsmooth='subgradient'))
     rows = []
-    for case, snr in (('noise-free', None), ('SNR 46.5', 46.5)):
+    for case, snr, kind in CASES:
         per = {m: {'err': [], 'settle': [], 'us': [], 'finite': True,
                    'fail': 0} for m in methods}
         for seed in range(args.seeds):
-            import warnings
             with warnings.catch_warnings():
                 warnings.simplefilter('ignore', RuntimeWarning)
-                run = sw.paper.section5.section5_run(args.samples, seed=seed, snr=snr,
-                                            methods=methods)
+                run = sw.paper.section5.section5_run(
+                    args.samples, seed=seed, snr=snr, snr_kind=kind,
+                    methods=methods)
             for m, res in run['results'].items():
                 err = res.parameter_error(run['theta_true'])
                 full = np.full(args.samples, np.nan)
@@ -84,7 +91,10 @@ def main():
           f" (inf: diverged)\n")
     print_table(['case', 'method', 'err@2k', 'err@5k', 'err@10k', 'err@20k',
                  'worst@20k', 'reach 5%', 'median settle', 'us/sample',
-                 'finite', 'diverged'], rows)
+                 'finite', 'failed*'], rows)
+    print("\n* runs whose result has success=False: diverged (inf), or a "
+          "final model with a pole of L1 or L2 on or outside the unit "
+          "circle")
 
 
 if __name__ == '__main__':

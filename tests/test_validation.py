@@ -228,3 +228,147 @@ def test_compare_unstable_model_reports_instead_of_nan():
     u = np.ones(400)
     with pytest.raises(ValueError, match=r"not finite .* unstable"):
         sw.compare(unstable, u, np.arange(400.0), plot=False)
+
+
+# --- compare(horizon=k): k-step-ahead prediction ------------------------
+
+def _direct_k_step(y, v, k):
+    """Transcription of the k-step predictor for the paper's L2, eq. (5.2):
+    y(s) = -1.2 y(s-1) - 0.32 y(s-2) + 2 v(s-1) - 0.1 v(s-2), run for
+    s = t-k+1..t from the measured y up to t-k (zero before sample 0)."""
+    n = y.size
+    out = np.zeros(n)
+    for t in range(n):
+        own = {}
+
+        def past(s):
+            if s < 0:
+                return 0.0
+            return y[s] if s <= t - k else own[s]
+
+        def vv(s):
+            return v[s] if s >= 0 else 0.0
+
+        for s in range(t - k + 1, t + 1):
+            own[s] = (-1.2 * past(s - 1) - 0.32 * past(s - 2)
+                      + 2.0 * vv(s - 1) - 0.1 * vv(s - 2))
+        out[t] = own[t]
+    return out
+
+
+@pytest.mark.parametrize('k', [1, 2, 3, 7, 30])
+def test_k_step_prediction_matches_direct_transcription(plant, rng, k):
+    u = sw.examples.paper_input(30, seed=10)
+    y = plant.simulate(u).outputs + 0.3 * rng.standard_normal(30)
+    v = plant.simulate(u, internal=True).outputs[2]
+    result = sw.compare(plant, u, y, plot=False, horizon=k)
+    np.testing.assert_allclose(result.yhat, _direct_k_step(y, v, k),
+                               rtol=1e-12, atol=1e-12)
+    assert result.horizon == k
+    assert result.fit == sw.fit_percent(y, result.yhat)
+
+
+def test_one_step_is_the_series_parallel_predictor(plant, rng):
+    # horizon=1: eq. (5.2) with the measured past outputs, in closed form
+    u = sw.examples.paper_input(200, seed=11)
+    y = plant.simulate(u).outputs + 0.2 * rng.standard_normal(200)
+    v = plant.simulate(u, internal=True).outputs[2]
+    yp, vp = np.r_[0.0, 0.0, y], np.r_[0.0, 0.0, v]
+    expected = (-1.2 * yp[1:-1] - 0.32 * yp[:-2] + 2.0 * vp[1:-1]
+                - 0.1 * vp[:-2])
+    np.testing.assert_allclose(
+        sw.compare(plant, u, y, plot=False, horizon=1).yhat, expected,
+        rtol=1e-12, atol=1e-12)
+
+
+def test_k_step_uses_only_outputs_k_samples_back(plant, rng):
+    u = sw.examples.paper_input(80, seed=12)
+    y = plant.simulate(u).outputs + 0.1 * rng.standard_normal(80)
+    bumped = y.copy()
+    bumped[40] += 1.0
+    for k in (1, 4):
+        a = sw.compare(plant, u, y, plot=False, horizon=k).yhat
+        b = sw.compare(plant, u, bumped, plot=False, horizon=k).yhat
+        np.testing.assert_array_equal(a[:40 + k], b[:40 + k])
+        assert a[40 + k] != b[40 + k]
+
+
+@pytest.mark.parametrize('extra', [0, 25])
+def test_long_horizon_is_the_free_run(plant, rng, extra):
+    u = sw.examples.paper_input(60, seed=13)
+    y = plant.simulate(u).outputs + 0.5 * rng.standard_normal(60)
+    pred = sw.compare(plant, u, y, plot=False, horizon=60 + extra)
+    np.testing.assert_allclose(pred.yhat, plant.simulate(u).outputs,
+                               rtol=1e-10, atol=1e-10)
+    # with exact data every horizon reproduces the output
+    exact = plant.simulate(u).outputs
+    for k in (1, 5):
+        np.testing.assert_allclose(
+            sw.compare(plant, u, exact, plot=False, horizon=k).yhat, exact,
+            rtol=1e-10, atol=1e-10)
+
+
+def test_k_step_of_linear_models(rng):
+    # y(t) = 1.5 y(t-1) - 0.7 y(t-2) + u(t-1) + 0.5 u(t-2)
+    tf = ct.tf([1.0, 0.5], [1.0, -1.5, 0.7], 1, name='lin')
+    u = rng.standard_normal(50)
+    y = ct.forced_response(tf, np.arange(50), u).outputs \
+        + 0.2 * rng.standard_normal(50)
+    yp, up = np.r_[0.0, 0.0, y], np.r_[0.0, 0.0, u]
+    expected = 1.5 * yp[1:-1] - 0.7 * yp[:-2] + up[1:-1] + 0.5 * up[:-2]
+    for sys in (tf, ct.ss(tf)):
+        np.testing.assert_allclose(
+            sw.compare(sys, u, y, plot=False, horizon=1).yhat, expected,
+            rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(
+        sw.compare(tf, u, y, plot=False, horizon=50).yhat,
+        ct.forced_response(tf, np.arange(50), u).outputs, rtol=1e-10,
+        atol=1e-10)
+
+
+def test_horizon_is_labelled_in_repr_and_plot(plant):
+    u = sw.examples.paper_input(50, seed=14)
+    y = plant.simulate(u).outputs
+    fig, ax = plt.subplots()
+    result = sw.compare(plant, u, y, ax=ax, horizon=3)
+    plt.close(fig)
+    assert 'horizon=3' in repr(result)
+    assert 'horizon' not in repr(sw.compare(plant, u, y, plot=False))
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert legend[1] == 'paper: 3-step fit 100.0 %'
+    assert '3-step' in ax.get_title()
+
+
+def test_horizon_errors(plant):
+    u = sw.examples.paper_input(20, seed=15)
+    y = plant.simulate(u).outputs
+    with pytest.raises(ValueError, match=r"horizon must be an integer >= 1;"
+                                         r" got 0"):
+        sw.compare(plant, u, y, plot=False, horizon=0)
+    with pytest.raises(TypeError, match=r"horizon must be an integer"):
+        sw.compare(plant, u, y, plot=False, horizon=1.5)
+    with pytest.raises(ValueError, match=r"initial_state applies to the "
+                                         r"free-run simulation"):
+        sw.compare(plant, u, y, plot=False, horizon=1,
+                   initial_state=np.zeros(plant.nstates))
+    bl = sw.Backlash(1.0, 1.0, 0.2, 0.2, dt=1, name='bl')
+    with pytest.raises(TypeError, match=r"horizon \(k-step prediction\) "
+                                        r"needs a SandwichSystem"):
+        sw.compare(bl, u, y, plot=False, horizon=1)
+    with pytest.raises(ValueError, match=r"needs a discrete-time model"):
+        sw.compare(ct.tf(1, [1, 1]), u, y, plot=False, horizon=1,
+                   timepts=np.arange(20.0))
+
+
+def test_one_step_needs_only_a_stable_l1(plant):
+    # an unstable L2 (c2 = 3: poles of modulus sqrt(3)) overflows in
+    # simulation, but L2 run from the measured outputs one step ahead
+    # stays finite
+    u = sw.examples.paper_input(1500, seed=16)
+    y = plant.simulate(u).outputs
+    theta = plant.theta.copy()
+    theta[1] = 3.0
+    bad = sw.SandwichSystem.from_theta(theta, **plant.orders)
+    with pytest.raises(ValueError, match=r"not finite"):
+        sw.compare(bad, u, y, plot=False)
+    assert np.isfinite(sw.compare(bad, u, y, plot=False, horizon=1).fit)

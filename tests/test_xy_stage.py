@@ -240,3 +240,36 @@ def test_table_and_figures(short_run):
     with pytest.raises(ValueError, match="not methods of this run"):
         section6.plot_mse(short_run, labels='gradient')
     plt.close('all')
+
+
+def test_validation_scores_free_run_and_one_step_ahead(short_run):
+    for label, res in short_run['results'].items():
+        val = short_run['validation'][label]
+        one = sw.compare(res.model, short_run['u_val'], short_run['y_val'],
+                         plot=False, horizon=1)
+        assert val['one_step_max_relative_error'] == one.max_relative_error
+        assert val['one_step_fit'] == one.fit
+        np.testing.assert_array_equal(val['one_step_yhat'], one.yhat)
+    # the paper's method: small one step ahead, large in free run
+    bundle = short_run['validation']['bundle']
+    assert bundle['one_step_max_relative_error'] < 0.11
+    assert (bundle['one_step_max_relative_error']
+            < 0.5 * bundle['max_relative_error'])
+    text = section6.section6_table(short_run)
+    assert 'one step' in text and 'free run' in text
+    assert f"{bundle['one_step_max_relative_error']:.2%}" in text
+
+
+def test_one_step_score_needs_only_a_stable_l1(plant):
+    u = examples.xy_stage_input(1000, seed=0)
+    y = plant.simulate(u).outputs
+    unstable_l2 = sw.SandwichSystem.from_theta(
+        [-2.1, 1.2, 0, 0, 1, 1, 0.1, 0.1, 0], **plant.orders, dt=DT)
+    out = section6.validate(unstable_l2, u, y)
+    assert out['max_relative_error'] == np.inf
+    assert np.isfinite(out['one_step_max_relative_error'])
+    unstable_l1 = sw.SandwichSystem.from_theta(
+        [0, 0, -2.5, 0, 1, 1, 0.1, 0.1, 0], **plant.orders, dt=DT)
+    out = section6.validate(unstable_l1, u, y)
+    assert out['one_step_max_relative_error'] == np.inf
+    assert out['one_step_fit'] == -np.inf and out['one_step_yhat'] is None

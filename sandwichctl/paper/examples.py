@@ -14,7 +14,8 @@ from ..model.sandwich import SandwichSystem
 from .._checks import (check_int, check_positive, check_nonnegative,
                           check_finite, check_signal)
 
-__all__ = ['paper_plant', 'paper_input', 'add_noise', 'PAPER_THETA0']
+__all__ = ['paper_plant', 'paper_input', 'add_noise', 'SNR_KINDS',
+           'PAPER_THETA0']
 
 #: Starting point theta_0 of the Section 5 study (order of eq. (2.5)).
 PAPER_THETA0 = np.array([0, 0, 0, 0, 0.1, 0.1, 0.1, 0.1, 0.0])
@@ -68,25 +69,56 @@ def paper_input(n, variance=0.49, seed=None):
     return np.sqrt(variance) * rng.standard_normal(n)
 
 
-def add_noise(y, snr, seed=None):
-    """Add white Gaussian output noise at a given signal-to-noise ratio.
+#: The readings of an output signal-to-noise ratio that `add_noise`
+#: accepts: kind -> its name, as the Section 5 study's headings print it.
+SNR_KINDS = {'variance': 'variance ratio', 'amplitude': 'amplitude ratio',
+             'db': 'dB'}
 
-    The SNR is the variance ratio var(y) / var(noise), the natural
-    reading of Section 5's "SNR equal to 46.5".
+
+def add_noise(y, snr, seed=None, kind='variance'):
+    r"""Add white Gaussian output noise at a given signal-to-noise ratio.
+
+    Section 5 of the paper says "SNR equal to 46.5" without a unit. Three
+    readings are in use, and they differ by orders of magnitude in the
+    noise they add; `kind` names the reading. With :math:`\sigma_y` and
+    :math:`\sigma_e` the standard deviations of y and of the noise:
+
+    - ``'variance'`` (default): the variance ratio
+      :math:`\mathrm{SNR} = \sigma_y^2 / \sigma_e^2`; 46.5 means
+      :math:`\sigma_e` = 14.7 % of :math:`\sigma_y`.
+    - ``'amplitude'``: the amplitude ratio
+      :math:`\mathrm{SNR} = \sigma_y / \sigma_e`; 46.5 means
+      :math:`\sigma_e` = 2.15 % of :math:`\sigma_y`.
+    - ``'db'``: decibels,
+      :math:`\mathrm{SNR} = 10 \log_{10}(\sigma_y^2 / \sigma_e^2)`; 46.5
+      means :math:`\sigma_e` = 0.47 % of :math:`\sigma_y`.
+
+    The default stays the variance ratio, the reading of earlier
+    releases, so results computed with it do not change; the Section 5
+    study runs all three (``docs/reproduction.md``).
 
     Parameters
     ----------
     y : array_like
         Noise-free output.
     snr : float
-        Variance ratio, > 0.
+        The signal-to-noise ratio, > 0, in the reading `kind`.
     seed : int or numpy.random.Generator, optional
         Seed for `numpy.random.default_rng`.
+    kind : {'variance', 'amplitude', 'db'}, optional
+        How `snr` is read (default 'variance'), see the list above.
 
     Returns
     -------
     ndarray
-        y plus noise of variance var(y) / snr.
+        y plus white Gaussian noise of variance var(y) / snr (variance),
+        var(y) / snr**2 (amplitude) or var(y) / 10**(snr / 10) (dB).
+
+    Raises
+    ------
+    ValueError
+        If `snr` is not a finite number > 0 or `kind` is not one of the
+        three readings.
 
     Examples
     --------
@@ -95,11 +127,22 @@ def add_noise(y, snr, seed=None):
     >>> noisy = sw.examples.add_noise(y, 46.5, seed=0)
     >>> round(float(np.var(y) / np.var(noisy - y)))
     46
+    >>> noisy = sw.examples.add_noise(y, 46.5, seed=0, kind='amplitude')
+    >>> round(float(np.std(y) / np.std(noisy - y)))
+    46
+    >>> noisy = sw.examples.add_noise(y, 46.5, seed=0, kind='db')
+    >>> round(float(10 * np.log10(np.var(y) / np.var(noisy - y))), 1)
+    46.5
     """
     y = np.asarray(y, dtype=float)
     snr = check_positive('snr', snr)
+    if kind not in SNR_KINDS:
+        raise ValueError(f"kind must be one of {sorted(SNR_KINDS)}; got "
+                         f"{kind!r}")
+    ratio = {'variance': snr, 'amplitude': snr ** 2,
+             'db': 10 ** (snr / 10)}[kind]
     rng = np.random.default_rng(seed)
-    return y + rng.standard_normal(y.shape) * np.sqrt(np.var(y) / snr)
+    return y + rng.standard_normal(y.shape) * np.sqrt(np.var(y) / ratio)
 
 
 # ----------------------------------------------------------------------

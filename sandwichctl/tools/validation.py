@@ -19,7 +19,10 @@ relative to the peak magnitude of the measured output (a fraction, not a
 percentage); `max_relative_error` can also scale by the output range.
 
 `compare` simulates one or several models on the same input, plots them
-over the measurement and returns these numbers.
+over the measurement and returns these numbers. With ``horizon=k`` it
+scores k-step-ahead *predictions* instead of the free-run simulation:
+the model runs from the measured past, so its errors cannot accumulate
+over more than k samples (see `compare`).
 """
 
 import numbers
@@ -28,7 +31,7 @@ import numpy as np
 import control as ct
 
 from ..model.sandwich import SandwichSystem
-from .._checks import check_signal
+from .._checks import check_signal, check_int
 
 __all__ = ['fit_percent', 'nrmse', 'max_relative_error', 'compare',
            'CompareResult', 'CompareResultList']
@@ -201,10 +204,15 @@ class CompareResult:
         The model that was simulated.
     ax : matplotlib.axes.Axes or None
         The axes plotted on, or None if `compare` did not plot.
+    horizon : int or None
+        None if `yhat` is the free-run simulation, k if it is the k-step-
+        ahead prediction (see `compare`).
     """
 
-    def __init__(self, name, y, yhat, timepts, model, ax=None):
+    def __init__(self, name, y, yhat, timepts, model, ax=None,
+                 horizon=None):
         self.name = name
+        self.horizon = horizon
         self.y = y
         self.yhat = yhat
         self.timepts = timepts
@@ -245,9 +253,12 @@ class CompareResult:
         return _plot_compare([self], ax)
 
     def __repr__(self):
+        horizon = ('' if self.horizon is None
+                   else f", horizon={self.horizon}")
         return (f"CompareResult(name={self.name!r}, fit={self.fit:.4g}, "
                 f"nrmse={self.nrmse:.4g}, "
-                f"max_relative_error={self.max_relative_error:.4g})")
+                f"max_relative_error={self.max_relative_error:.4g}"
+                f"{horizon})")
 
 
 class CompareResultList(list):
@@ -296,13 +307,38 @@ class CompareResultList(list):
 
 
 def compare(model, u, y, ax=None, initial_state=None, timepts=None,
-            labels=None, plot=True):
-    """Simulate model(s) on measured input and compare with measured output.
+            labels=None, plot=True, horizon=None):
+    r"""Simulate (or predict) model(s) on measured data and compare.
 
-    Like MATLAB's ``compare``: each model is simulated (not predicted one
-    step ahead) from `initial_state` with input `u`, its output is plotted
-    over the measured `y` with the percentage fit in the legend, and the
+    Like MATLAB's ``compare``: by default each model is simulated from
+    `initial_state` with input `u` (free run), its output is plotted over
+    the measured `y` with the percentage fit in the legend, and the
     numbers are returned.
+
+    With ``horizon=k`` the model output is the *k-step-ahead prediction*
+    :math:`\hat y(t \mid t-k)`: the model runs from the measured past, so
+    only the last k samples are its own. For a `SandwichSystem`, L1 and
+    the backlash do not depend on y, so x and v are simulated from u as in
+    the free run; L2's recursion (2.1),
+
+    .. math:: \hat y(s) = -\sum_{i=1}^{n_c} c_i\, y^*(s-i)
+              + \sum_{j=0}^{n_d} d_j\, v(s-q_2-j),
+
+    is then run for s = t-k+1, ..., t with :math:`y^*(s-i)` the measured
+    output y(s-i) if :math:`s-i \le t-k` and the prediction
+    :math:`\hat y(s-i)` otherwise. ``horizon=1`` is the one-step-ahead
+    predictor, which is the paper's series-parallel predictor of (2.6);
+    a horizon of N or more is the free run. For a discrete-time linear
+    system (``ct.tf`` or ``ct.ss``) the same is done with its own
+    difference equation, its input u in the place of v. Samples before
+    t = 0 are zero (the free run's zero initial state), so the first k
+    predictions are those of the free run.
+
+    This is the equation-error (ARX-type) predictor: measured outputs
+    enter the model's autoregressive part. MATLAB's ``compare(data, sys,
+    k)`` predicts with the model's noise model instead, and for an
+    output-error model, whose noise model is 1, its k-step prediction is
+    the simulation.
 
     Parameters
     ----------
@@ -330,6 +366,10 @@ def compare(model, u, y, ax=None, initial_state=None, timepts=None,
         Legend labels, one per model; default the system names.
     plot : bool, optional
         If False, only compute the numbers (no matplotlib calls).
+    horizon : int or None, optional
+        None (default) for the free-run simulation, or the prediction
+        horizon k >= 1 (see above). Needs a `SandwichSystem` or a
+        discrete-time linear system, and no `initial_state`.
 
     Returns
     -------
@@ -341,9 +381,13 @@ def compare(model, u, y, ax=None, initial_state=None, timepts=None,
     ------
     ValueError
         If u and y differ in length or contain NaN/inf, if y is constant,
-        or if a model is not SISO.
+        if a model is not SISO or its output is not finite (unstable), or
+        if `horizon` is given with `initial_state` or a continuous-time
+        model.
     TypeError
-        If a model is not a python-control system.
+        If a model is not a python-control system, if `horizon` is not an
+        integer, or if `horizon` is given for a nonlinear system other
+        than a `SandwichSystem`.
 
     See Also
     --------
@@ -358,6 +402,20 @@ def compare(model, u, y, ax=None, initial_state=None, timepts=None,
     >>> result = sw.compare(plant, u, y, plot=False)
     >>> result.fit, result.max_relative_error
     (100.0, 0.0)
+
+    A model with a wrong L2 drifts in free run; its one-step-ahead
+    prediction, restarted from the measured output at every sample,
+    stays closer:
+
+    >>> theta = plant.theta.copy()
+    >>> theta[0] *= 1.05                          # c1 of L2 off by 5 %
+    >>> model = sw.SandwichSystem.from_theta(theta, **plant.orders)
+    >>> free = sw.compare(model, u, y, plot=False)
+    >>> one = sw.compare(model, u, y, plot=False, horizon=1)
+    >>> bool(one.max_relative_error < free.max_relative_error)
+    True
+    >>> one.horizon
+    1
     """
     many = isinstance(model, (list, tuple))
     models = list(model) if many else [model]
@@ -379,11 +437,23 @@ def compare(model, u, y, ax=None, initial_state=None, timepts=None,
                          f"({len(models)}); got {len(labels)}")
     if timepts is not None:
         timepts = check_signal('timepts', timepts, length=u.size)
+    if horizon is not None:
+        horizon = check_int('horizon', horizon, minimum=1)
+        if initial_state is not None:
+            raise ValueError(
+                "initial_state applies to the free-run simulation "
+                "(horizon=None); a k-step predictor starts from the "
+                f"measured past; got horizon={horizon} and an "
+                "initial_state, pass only one of them")
 
     results = CompareResultList()
     for label, m in zip(labels, models):
-        yhat, t = _simulate(m, u, initial_state, timepts)
-        results.append(CompareResult(str(label), y, yhat, t, m))
+        if horizon is None:
+            yhat, t = _simulate(m, u, initial_state, timepts)
+        else:
+            yhat, t = _predict(m, u, y, horizon, timepts)
+        results.append(CompareResult(str(label), y, yhat, t, m,
+                                     horizon=horizon))
     if plot:
         ax = _plot_compare(results, ax)
         for r in results:
@@ -415,14 +485,7 @@ def _default_timepts(sys, n):
 def _simulate(sys, u, initial_state, timepts):
     """Simulated output of one model and its time points."""
 
-    if not isinstance(sys, ct.InputOutputSystem):
-        raise TypeError(
-            f"model must be a SandwichSystem or a python-control system "
-            f"(e.g. ct.tf(...)); got {type(sys).__name__}")
-    if sys.ninputs != 1 or sys.noutputs != 1:
-        raise ValueError(
-            f"model {sys.name!r} must be single-input single-output; got "
-            f"{sys.ninputs} inputs and {sys.noutputs} outputs")
+    _check_siso(sys)
     t = _default_timepts(sys, u.size) if timepts is None else timepts
     x0 = 0.0 if initial_state is None else initial_state
     # An unstable model overflows; that is reported below, not warned.
@@ -442,6 +505,101 @@ def _simulate(sys, u, initial_state, timepts):
     return yhat, t
 
 
+def _check_siso(sys):
+    if not isinstance(sys, ct.InputOutputSystem):
+        raise TypeError(
+            f"model must be a SandwichSystem or a python-control system "
+            f"(e.g. ct.tf(...)); got {type(sys).__name__}")
+    if sys.ninputs != 1 or sys.noutputs != 1:
+        raise ValueError(
+            f"model {sys.name!r} must be single-input single-output; got "
+            f"{sys.ninputs} inputs and {sys.noutputs} outputs")
+
+
+def _recursion(sys, u):
+    """AR coefficients c and forced part f of the output recursion.
+
+    y(s) = -sum_i c[i-1] y(s-i) + f(s) is the model's output equation, with
+    f computed from u (zero before sample 0).
+    """
+    if isinstance(sys, SandwichSystem):
+        with np.errstate(over='ignore', invalid='ignore'):
+            v = sys.simulate(u, internal=True).outputs[2]
+        if not np.all(np.isfinite(v)):
+            raise ValueError(
+                f"the backlash output v of model {sys.name!r} is not finite "
+                f"(first bad sample {int(np.flatnonzero(~np.isfinite(v))[0])}"
+                f"); its L1 is probably unstable")
+        co = sys.coefficients
+        fir = np.concatenate([np.zeros(co['q2']), co['d']])
+        f = np.convolve(v, fir)[:u.size]
+        return co['c'], f
+    if not isinstance(sys, (ct.TransferFunction, ct.StateSpace)):
+        raise TypeError(
+            f"horizon (k-step prediction) needs a SandwichSystem or a "
+            f"discrete-time linear system (ct.tf, ct.ss); model "
+            f"{sys.name!r} is a {type(sys).__name__}")
+    if not sys.isdtime():
+        raise ValueError(
+            f"horizon (k-step prediction) needs a discrete-time model; "
+            f"{sys.name!r} has dt={sys.dt!r}")
+    tf = sys if isinstance(sys, ct.TransferFunction) else ct.tf(sys)
+    num = np.atleast_1d(np.asarray(tf.num[0][0], dtype=float))
+    den = np.trim_zeros(np.atleast_1d(np.asarray(tf.den[0][0],
+                                                 dtype=float)), 'f')
+    num = np.trim_zeros(num, 'f') if np.any(num) else np.zeros(1)
+    if num.size > den.size:
+        raise ValueError(
+            f"model {sys.name!r} is improper (numerator degree "
+            f"{num.size - 1} > denominator degree {den.size - 1}), so it has "
+            f"no causal difference equation to predict with")
+    fir = np.concatenate([np.zeros(den.size - num.size), num]) / den[0]
+    return den[1:] / den[0], np.convolve(u, fir)[:u.size]
+
+
+def _predict(sys, u, y, horizon, timepts):
+    """k-step-ahead prediction of one model and its time points."""
+    _check_siso(sys)
+    t = _default_timepts(sys, u.size) if timepts is None else timepts
+    c, f = _recursion(sys, u)
+    yhat = _k_step(c, f, y, horizon)
+    if not np.all(np.isfinite(yhat)):
+        raise ValueError(
+            f"the {horizon}-step prediction of model {sys.name!r} is not "
+            f"finite (first bad sample "
+            f"{int(np.flatnonzero(~np.isfinite(yhat))[0])}); the model is "
+            f"probably unstable")
+    return yhat, t
+
+
+def _k_step(c, f, y, k):
+    """yhat(t | t-k) of y(s) = -sum c_i y(s-i) + f(s), for every t.
+
+    Vectorised over the origins r = t - k: step j predicts sample r + j
+    from the measured samples up to r (zero before 0) and the predictions
+    of steps 1..j-1.
+    """
+    n = y.size
+    k = min(k, n)                       # a longer horizon is the free run
+    origin = np.arange(n) - k
+    padded_y = np.concatenate([np.zeros(k + c.size), y])
+    padded_f = np.concatenate([np.zeros(k), f])
+    shift = k + c.size                  # padded_y[shift + s] is y(s)
+    steps = []                          # steps[-i]: prediction of r + j - i
+    for j in range(1, k + 1):
+        pred = padded_f[k + origin + j].copy()
+        for i, ci in enumerate(c, 1):
+            if ci == 0:
+                continue
+            past = (steps[j - i - 1] if j - i >= 1
+                    else padded_y[shift + origin + j - i])
+            pred -= ci * past
+        steps.append(pred)
+        if len(steps) > c.size:
+            steps[j - c.size - 1] = None          # no longer needed
+    return steps[-1]
+
+
 def _plot_compare(results, ax):
     import matplotlib.pyplot as plt
 
@@ -450,11 +608,14 @@ def _plot_compare(results, ax):
     first = results[0]
     ax.plot(first.timepts, first.y, color='k', lw=1.2, label='measured')
     for r in results:
+        what = '' if r.horizon is None else f"{r.horizon}-step "
         ax.plot(r.timepts, r.yhat, lw=1.0,
-                label=f"{r.name}: fit {r.fit:.1f} %")
+                label=f"{r.name}: {what}fit {r.fit:.1f} %")
     dt = getattr(first.model, 'dt', None)
     ax.set_xlabel('k' if dt is True else 'time')
     ax.set_ylabel('y')
-    ax.set_title('Measured and simulated output')
+    ax.set_title('Measured and simulated output' if first.horizon is None
+                 else f"Measured and {first.horizon}-step-ahead predicted "
+                      f"output")
     ax.legend()
     return ax
