@@ -1,0 +1,197 @@
+"""Input/output data in python-control's types, one or several experiments.
+
+Every function that takes measured data (`identify`, `identify_linear`,
+`refine`, `compare`, `residuals`, `select_structure`) reads it through
+`as_experiments`, so they all accept the same forms:
+
+- ``u, y``: two 1-D arrays of the same length (one experiment);
+- a `control.TimeResponseData` with one input and one output (for
+  example from ``ct.input_output_response`` or a logged record wrapped as
+  ``ct.TimeResponseData(t, y, inputs=u)``); its time vector gives dt;
+- a list of either: several experiments, each from its own initial state,
+  whose costs are summed. They must share dt; their lengths may differ.
+
+A record with NaN or inf, a time vector that is not evenly spaced, a dt
+that does not match the time vector, a continuous-time ``dt=0`` and
+experiments with different sampling times are refused with a message
+that says which experiment and what was wrong.
+"""
+
+import numbers
+
+import numpy as np
+import control as ct
+
+from .._checks import check_signal
+
+__all__ = ['Experiments', 'as_experiments']
+
+
+class Experiments(list):
+    """A list of (u, y) pairs of 1-D float arrays, with their ``dt``.
+
+    Built by `as_experiments`; ``len(data)`` is the number of experiments
+    and ``data.n_samples`` the total number of samples.
+
+    Examples
+    --------
+    >>> import numpy as np, sandwichctl as sw
+    >>> data = sw.as_experiments([(np.arange(4.), np.ones(4)),
+    ...                           (np.arange(3.), np.zeros(3))], dt=0.1)
+    >>> len(data), data.n_samples, data.dt
+    (2, 7, 0.1)
+    """
+
+    def __init__(self, pairs, dt):
+        super().__init__(pairs)
+        self.dt = dt
+
+    @property
+    def n_samples(self):
+        """Total number of samples over the experiments."""
+        return sum(u.size for u, _ in self)
+
+    @property
+    def u(self):
+        """The inputs, one array per experiment."""
+        return [u for u, _ in self]
+
+    @property
+    def y(self):
+        """The outputs, one array per experiment."""
+        return [y for _, y in self]
+
+
+def _time_step(t, where):
+    t = np.asarray(t, dtype=float)
+    if t.ndim != 1 or t.size < 2 or not np.all(np.isfinite(t)):
+        raise ValueError(f"{where}: the time vector must be a finite 1-D "
+                         f"array of at least 2 points")
+    steps = np.diff(t)
+    step = float(np.median(steps))
+    if not step > 0:
+        raise ValueError(f"{where}: the time vector must increase; got a "
+                         f"step of {step:g}")
+    if np.max(np.abs(steps - step)) > 1e-6 * step:
+        bad = int(np.argmax(np.abs(steps - step)))
+        raise ValueError(
+            f"{where}: the time vector is not evenly spaced (step {bad} is "
+            f"{steps[bad]:g}, the others {step:g}); a discrete-time model "
+            f"needs a sampled record: resample it first")
+    return step
+
+
+def _one(item, where):
+    """(u, y, dt or None) of one experiment."""
+    if isinstance(item, ct.TimeResponseData):
+        if item.ninputs != 1 or item.noutputs != 1:
+            raise ValueError(
+                f"{where}: the TimeResponseData must have one input and one "
+                f"output; got {item.ninputs} inputs and {item.noutputs} "
+                f"outputs")
+        if getattr(item, 'ntraces', 0) not in (0, 1):
+            raise ValueError(f"{where}: the TimeResponseData has "
+                             f"{item.ntraces} traces; pass them as a list "
+                             f"of experiments")
+        t = np.asarray(item.time, dtype=float)
+        u = np.squeeze(np.asarray(item.inputs))
+        y = np.squeeze(np.asarray(item.outputs))
+        step = _time_step(t, where)
+        return (check_signal(f"{where} inputs", u, length=t.size),
+                check_signal(f"{where} outputs", y, length=t.size), step)
+    if isinstance(item, (tuple, list)) and len(item) == 2:
+        u = check_signal(f"{where} u", item[0])
+        y = check_signal(f"{where} y", item[1])
+        if u.size != y.size:
+            raise ValueError(f"{where}: u and y must have the same length; "
+                             f"got {u.size} and {y.size} samples")
+        return u, y, None
+    raise TypeError(
+        f"{where} must be a (u, y) pair of arrays or a "
+        f"control.TimeResponseData; got {type(item).__name__}")
+
+
+def _check_dt(dt):
+    if dt is None or dt is True:
+        return dt
+    if isinstance(dt, bool) or not isinstance(dt, numbers.Real):
+        raise TypeError(f"dt must be a positive number or True; got "
+                        f"{type(dt).__name__} {dt!r}")
+    if dt == 0:
+        raise ValueError("dt = 0 is a continuous-time record; sandwichctl "
+                         "identifies discrete-time models from sampled "
+                         "data: give the sampling time")
+    if not (np.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be a finite sampling time > 0 or True; "
+                         f"got {dt!r}")
+    return float(dt)
+
+
+def as_experiments(u, y=None, dt=None):
+    """Read measured data in any of the accepted forms (module docstring).
+
+    Parameters
+    ----------
+    u : array_like, control.TimeResponseData or list
+        The input (with `y`), a record, or a list of experiments.
+    y : array_like, optional
+        The output, when `u` is an array.
+    dt : float or True, optional
+        Sampling time. With records it must match their time vectors
+        (default: taken from them); with arrays it defaults to True
+        (discrete, unspecified).
+
+    Returns
+    -------
+    Experiments
+
+    Raises
+    ------
+    ValueError, TypeError
+        With the experiment and what is wrong.
+
+    Examples
+    --------
+    >>> import numpy as np, control as ct, sandwichctl as sw
+    >>> t = 0.01 * np.arange(100)
+    >>> rec = ct.TimeResponseData(t, np.cos(t), inputs=np.sin(t))
+    >>> data = sw.as_experiments([rec, rec])
+    >>> len(data), data.dt
+    (2, 0.01)
+    """
+    dt = _check_dt(dt)
+    if y is not None:
+        if isinstance(u, (ct.TimeResponseData, list, tuple)) and not \
+                np.ndim(u) == 1:
+            raise TypeError("give either u and y as arrays, or one record "
+                            "(or list of records) without y")
+        items, names = [(u, y)], ['the data']
+    elif isinstance(u, ct.TimeResponseData):
+        items, names = [u], ['the record']
+    elif isinstance(u, (list, tuple)):
+        if len(u) == 0:
+            raise ValueError("the list of experiments is empty")
+        items = list(u)
+        names = [f"experiment {i}" for i in range(len(items))]
+    else:
+        raise TypeError(
+            f"data must be u and y arrays, a control.TimeResponseData or a "
+            f"list of experiments; got {type(u).__name__} without y")
+    pairs, steps = [], []
+    for item, where in zip(items, names):
+        uu, yy, step = _one(item, where)
+        pairs.append((uu, yy))
+        steps.append((where, step))
+    found = [(w, s) for w, s in steps if s is not None]
+    if found:
+        ref_where, ref = found[0]
+        for where, step in found[1:]:
+            if abs(step - ref) > 1e-6 * ref:
+                raise ValueError(
+                    f"{where} is sampled at dt = {step:g} but {ref_where} at "
+                    f"dt = {ref:g}; experiments must share the sampling time")
+        if dt not in (None, True) and abs(dt - ref) > 1e-6 * ref:
+            raise ValueError(f"dt = {dt:g} does not match the records' time "
+                             f"step {ref:g}")
+        dt = ref
+    return Experiments(pairs, True if dt is None else dt)
