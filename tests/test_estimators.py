@@ -128,7 +128,10 @@ def test_overparametrised_orders_warn():
     (dict(model='plant'), TypeError, 'model must be a SandwichSystem'),
     (dict(y=np.zeros(10)), ValueError, 'same length'),
     (dict(n_starts=0), ValueError, 'n_starts must be an integer >= 1'),
-    (dict(u=np.zeros(10), y=np.zeros(10)), ValueError, 'too few'),
+    (dict(u=np.sin(np.arange(10.0)), y=np.cos(np.arange(10.0))), ValueError,
+     'too few'),
+    (dict(u=np.zeros(500)), ValueError, 'u is constant'),
+    (dict(offsets='both'), ValueError, 'offsets must be one of'),
 ])
 def test_refine_bad_input(kwargs, exc, match):
     plant = sw.examples.paper_plant()

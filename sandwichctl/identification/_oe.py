@@ -59,7 +59,7 @@ class Structure:
     """
 
     def __init__(self, na, nb, nc, nd, q1, q2, i1=0, i2=0,
-                 zero_radius=ZERO_RADIUS):
+                 zero_radius=ZERO_RADIUS, n_offsets=0):
         if not (0 <= i1 <= na and 0 <= i2 <= nc):
             raise ValueError(f"integrators ({i1}, {i2}) exceed the orders "
                              f"na = {na}, nc = {nc}")
@@ -71,6 +71,8 @@ class Structure:
         self.im = self.nc_free + self.na_free      # m1 in phi
         self.im_theta = nc + na                    # m1 in theta
         self.zero_radius = zero_radius
+        self.n_off = n_offsets                     # output offsets, last
+        self.size = self.q + n_offsets
         self.t0 = self._affine(np.zeros(self.q))
         self.T = np.column_stack([self._affine(e) - self.t0
                                   for e in np.eye(self.q)]) if self.q else \
@@ -84,7 +86,11 @@ class Structure:
 
     def theta(self, phi):
         """Full parameter vector of eq. (2.5)."""
-        return self.t0 + self.T @ phi
+        return self.t0 + self.T @ phi[:self.q]
+
+    def extend(self, phi):
+        """A model's reduced vector with zero output offsets appended."""
+        return np.concatenate([phi[:self.q], np.zeros(self.n_off)])
 
     def phi(self, theta):
         """Reduced vector of a theta whose denominators hold the
@@ -93,7 +99,8 @@ class Structure:
         c, a = theta[:nc], theta[nc:nc + na]
         c_free = np.polydiv(np.r_[1.0, c], integrator_poly(self.i2))[0]
         a_free = np.polydiv(np.r_[1.0, a], integrator_poly(self.i1))[0]
-        return np.concatenate([c_free[1:], a_free[1:], theta[nc + na:]])
+        return self.extend(np.concatenate([c_free[1:], a_free[1:],
+                                           theta[nc + na:]]))
 
     def stable(self, phi):
         """Finite, the free denominators strictly stable and the zeros
@@ -124,8 +131,8 @@ class Structure:
 
     def bounds(self, phi, m_min):
         """Box for a step d: m + d >= m_min, D + d >= 0."""
-        lo = np.full(self.q, -np.inf)
-        hi = np.full(self.q, np.inf)
+        lo = np.full(self.size, -np.inf)
+        hi = np.full(self.size, np.inf)
         im = self.im
         lo[im:im + 2] = m_min - phi[im:im + 2]
         lo[im + 2:im + 4] = -phi[im + 2:im + 4]
@@ -138,23 +145,49 @@ class Structure:
         phi[im + 2:im + 4] = np.maximum(phi[im + 2:im + 4], 0.0)
         return phi
 
+    def _offsets(self, phi, n_exp):
+        if self.n_off not in (0, n_exp):
+            raise ValueError(f"{self.n_off} offsets for {n_exp} experiments")
+        return phi[self.q:] if self.n_off else np.zeros(n_exp)
+
     def cost(self, phi, u, y, sp=False):
-        """Output-error cost 0.5 * sum(r^2) (inf if not finite); with
-        ``sp`` the series-parallel prediction error instead."""
+        """Output-error cost 0.5 * sum(r^2) over the experiments (lists u
+        and y; inf if not finite); with ``sp`` the series-parallel
+        prediction error instead."""
+        if sp:
+            r = self.jacobian(phi, u, y, sp)[0]
+        else:
+            theta = self.theta(phi)
+            off = self._offsets(phi, len(u))
+            with np.errstate(all='ignore'):
+                r = np.concatenate([yy - oe_output(theta, self.o, uu) - c
+                                    for uu, yy, c in zip(u, y, off)])
         with np.errstate(all='ignore'):
-            if sp:
-                r = self.jacobian(phi, u, y, sp)[0]
-            else:
-                r = y - oe_output(self.theta(phi), self.o, u)
             c = 0.5 * float(r @ r)
         return c if np.isfinite(c) else np.inf
 
     def jacobian(self, phi, u, y, sp=False):
-        """(residuals, Jacobian of y_hat w.r.t. phi, zones)."""
-        with np.errstate(all='ignore'):
-            yhat, J, zones = simulate_with_sensitivities(
-                self.theta(phi), self.o, u, y if sp else None)
-        return y - yhat, J @ self.T, zones
+        """(residuals, Jacobian of y_hat w.r.t. phi, zones), the
+        experiments (lists u and y) stacked; each experiment starts from
+        rest and has its own output offset when the structure has them."""
+        theta = self.theta(phi)
+        off = self._offsets(phi, len(u))
+        rs, Js, zs = [], [], []
+        for e, (uu, yy) in enumerate(zip(u, y)):
+            with np.errstate(all='ignore'):
+                yhat, J, zones = simulate_with_sensitivities(
+                    theta, self.o, uu, yy - off[e] if sp else None)
+                J = J @ self.T
+            if self.n_off:
+                ind = np.zeros((uu.size, self.n_off))
+                ind[:, e] = 1.0
+                J = np.hstack([J, ind])
+            rs.append(yy - yhat - off[e])
+            Js.append(J)
+            zs.append(zones)
+        if len(rs) == 1:
+            return rs[0], Js[0], zs[0]
+        return np.concatenate(rs), np.vstack(Js), np.concatenate(zs)
 
 
 def _step(A, g, lo, hi):
@@ -254,7 +287,8 @@ def lm(st, phi, u, y, max_iter=100, tol=1e-10, m_min=1e-9, sp=False,
         predicted = 0.5 * float(g @ d) / max(cost, 1e-300)
         # what is left, relative to the output's energy: a change of the
         # fit in the sixth digit is not worth more iterations
-        energy = 0.5 * float(np.sum((y - np.mean(y)) ** 2))
+        yc = np.concatenate(y)
+        energy = 0.5 * float(np.sum((yc - np.mean(yc)) ** 2))
         share = cost / max(energy, 1e-300)
         if max(last_decrease, predicted) * share < CONVERGED:
             converged = True

@@ -51,20 +51,13 @@ from tqdm.auto import tqdm
 from ._oe import Structure, lm
 from .result import IdentificationResult, backlash_significance, whiteness
 from ..model.sandwich import SandwichSystem
-from .._checks import check_signal, check_int, check_positive
+from ._data import prepare, scale as _scale
+from .._checks import check_int, check_positive
 
 __all__ = ['refine']
 
 #: A fit must be at least this many percent to count as explaining the data.
 MIN_FIT = 5.0
-
-
-def _scale(x):
-    """A positive scale of a signal: its standard deviation (RMS if flat)."""
-    s = float(np.std(x))
-    if not s > 0:
-        s = float(np.sqrt(np.mean(np.square(x))))
-    return s if s > 0 else 1.0
 
 
 def _unit_poles(den, tol=1e-9):
@@ -86,16 +79,21 @@ class Problem:
     """
 
     def __init__(self, u, y, orders, i1=0, i2=0, sign=1, dt=True,
-                 name=None):
+                 name=None, offsets=False):
+        us = list(u) if isinstance(u, list) else [u]
+        ys = list(y) if isinstance(y, list) else [y]
         self.orders = {k: orders[k] for k in ('na', 'nb', 'nc', 'nd', 'q1',
                                                'q2')}
         self.st = Structure(*(self.orders[k] for k in
-                              ('na', 'nb', 'nc', 'nd', 'q1', 'q2')), i1, i2)
+                              ('na', 'nb', 'nc', 'nd', 'q1', 'q2')), i1, i2,
+                            n_offsets=len(us) if offsets else 0)
         self.sign = 1 if sign >= 0 else -1
-        self.su, self.sy = _scale(u), _scale(y)
-        self.u_user, self.y_user = u, y
-        self.u = u / self.su
-        self.y = self.sign * y / self.sy
+        self.su = _scale(np.concatenate(us))
+        self.sy = _scale(np.concatenate(ys))
+        self.u_user, self.y_user = us, ys
+        self.u = [part / self.su for part in us]
+        self.y = [self.sign * part / self.sy for part in ys]
+        self.n_samples = sum(part.size for part in us)
         self.dt, self.name = dt, name
         # theta_user = theta_scaled * unit: slopes sy/su, thresholds su
         im = self.st.im_theta
@@ -118,10 +116,11 @@ class Problem:
         """The `IdentificationResult` of an `_oe.lm` output, with verdict."""
         phi = out['phi']
         theta = self.st.theta(phi) * self.unit
-        n, q = self.u.size, self.st.q
+        n, q = self.n_samples, self.st.size
         r = self.sign * self.sy * out['r']          # user units
         cost = 0.5 * float(r @ r)
-        denom = np.linalg.norm(self.y_user - self.y_user.mean())
+        y_all = np.concatenate(self.y_user)
+        denom = np.linalg.norm(y_all - y_all.mean())
         fit = 100 * (1 - np.linalg.norm(r) / denom) if denom > 0 \
             else -np.inf
         J = out['J']
@@ -131,7 +130,9 @@ class Problem:
             with np.errstate(all='ignore'):
                 cov_phi = sigma2 * np.linalg.pinv(J.T @ J)
                 T = self.st.T * self.unit[:, None]
-                std = np.sqrt(np.clip(np.diag(T @ cov_phi @ T.T), 0, None))
+                cov_model = cov_phi[:self.st.q, :self.st.q]
+                std = np.sqrt(np.clip(np.diag(T @ cov_model @ T.T), 0,
+                                      None))
         stable = self.st.poles_stable(phi)
         integ = {'L1': self.st.i1, 'L2': self.st.i2}
         problems = []
@@ -168,7 +169,12 @@ class Problem:
             options={}, orders=dict(self.orders), theta_labels=labels,
             nit=out['nit'], std=std, fit=float(fit), cost=cost,
             integrators=integ, linear=linear, significance=significance,
-            whiteness=whiteness(r), converged=bool(out['converged']))
+            whiteness=whiteness(r), converged=bool(out['converged']),
+            n_experiments=len(self.u))
+        if self.st.n_off:
+            res.offsets = {'method': 'estimate', 'u': [0.0] * len(self.u),
+                           'y': list(self.sign * self.sy
+                                     * phi[self.st.q:])}
         if extra:
             res.update(extra)
         return res
@@ -207,8 +213,9 @@ def _admissible_start(st, phi, m_min):
     return phi
 
 
-def refine(model, u, y, max_iter=100, tol=1e-10, n_starts=1, spread=0.3,
-           seed=None, m_min=1e-9, progress=False):
+def refine(model, u, y=None, max_iter=100, tol=1e-10, n_starts=1,
+           spread=0.3, seed=None, m_min=1e-9, progress=False,
+           offsets='none'):
     r"""Refine a sandwich model on a whole record by output-error LM.
 
     Parameters
@@ -218,7 +225,9 @@ def refine(model, u, y, max_iter=100, tol=1e-10, n_starts=1, spread=0.3,
         integrators (poles exactly at z = 1) and the sign of its gain are
         kept.
     u, y : array_like, shape (N,)
-        Input and measured output, from zero initial state.
+        Input and measured output, from zero initial state; or, in `u`
+        alone, a ``control.TimeResponseData`` or a list of experiments
+        (see `identify`).
     max_iter : int, optional
         Maximum Levenberg-Marquardt iterations per start (default 100).
     tol : float, optional
@@ -235,6 +244,8 @@ def refine(model, u, y, max_iter=100, tol=1e-10, n_starts=1, spread=0.3,
         Lower bound on the slopes m1, m2, relative to the scaled data.
     progress : bool, optional
         Show a progress bar over the starts.
+    offsets : {'none', 'mean', 'estimate'}, optional
+        As in `identify` (default 'none').
 
     Returns
     -------
@@ -259,11 +270,7 @@ def refine(model, u, y, max_iter=100, tol=1e-10, n_starts=1, spread=0.3,
     if not isinstance(model, SandwichSystem):
         raise TypeError(f"model must be a SandwichSystem; got "
                         f"{type(model).__name__}")
-    u = check_signal('u', u)
-    y = check_signal('y', y)
-    if u.size != y.size:
-        raise ValueError(f"u and y must have the same length; got "
-                         f"{u.size} and {y.size} samples")
+    us, ys, _, offset_info, estimate = prepare(u, y, model.dt, offsets)
     max_iter = check_int('max_iter', max_iter, minimum=1)
     n_starts = check_int('n_starts', n_starts, minimum=1)
     tol = check_positive('tol', tol)
@@ -271,13 +278,13 @@ def refine(model, u, y, max_iter=100, tol=1e-10, n_starts=1, spread=0.3,
     m_min = check_positive('m_min', m_min)
     norm = model.normalized()
     co = norm.coefficients
-    prob = Problem(u, y, norm.orders, _unit_poles(co['a']),
+    prob = Problem(us, ys, norm.orders, _unit_poles(co['a']),
                    _unit_poles(co['c']), norm.gain_sign, dt=model.dt,
-                   name=model.name)
+                   name=model.name, offsets=estimate)
     st = prob.st
-    if u.size <= 2 * st.q:
-        raise ValueError(f"u and y have {u.size} samples, too few for "
-                         f"{st.q} parameters")
+    if prob.n_samples <= 2 * st.size:
+        raise ValueError(f"the data have {prob.n_samples} samples, too few "
+                         f"for {st.size} parameters")
     phi0 = _admissible_start(st, prob.phi_of_model(norm), m_min)
     st.widen_zero_radius(phi0)
     rng = np.random.default_rng(seed)
@@ -294,6 +301,7 @@ def refine(model, u, y, max_iter=100, tol=1e-10, n_starts=1, spread=0.3,
         'options': dict(max_iter=max_iter, tol=tol, n_starts=n_starts,
                         spread=spread, m_min=m_min)})
     res.counts['starts'] = n_starts
+    res.offsets = dict(offset_info, **(res.get('offsets') or {}))
     _warn_poorly_determined(res)
     return res
 

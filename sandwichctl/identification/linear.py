@@ -38,7 +38,8 @@ import control as ct
 from scipy.optimize import OptimizeResult
 from scipy.signal import lfilter
 
-from .._checks import check_signal, check_int, check_positive, check_dt
+from ._data import prepare, scale
+from .._checks import check_int, check_positive, check_dt
 
 __all__ = ['identify_linear', 'LinearIdentificationResult']
 
@@ -48,8 +49,31 @@ _BOUNDARY = 1 - 1e-5      # a fit with a free pole beyond this is pinned
 _SM_ITER = 5              # Steiglitz-McBride iterations of the start
 
 
+def _segs(x):
+    """Experiments as a list of arrays (one array is one experiment)."""
+    return list(x) if isinstance(x, (list, tuple)) else [x]
+
+
+def _split(x, like):
+    """Cut the concatenated array x into pieces as long as `like`'s."""
+    out, at = [], 0
+    for part in like:
+        out.append(x[at:at + part.size])
+        at += part.size
+    return out
+
+
+def _filt(b, a, x):
+    """lfilter over each experiment from zero initial conditions,
+    concatenated."""
+    return np.concatenate([lfilter(b, a, part) for part in _segs(x)])
+
+
 def _delays(x, first, count):
-    """Matrix whose column j is x delayed by first + j samples (zero ICs)."""
+    """Matrix whose column j is x delayed by first + j samples (zero ICs),
+    experiment by experiment."""
+    if isinstance(x, (list, tuple)):
+        return np.vstack([_delays(part, first, count) for part in x])
     n = x.size
     out = np.zeros((n, count))
     for j in range(count):
@@ -72,7 +96,7 @@ def _max_root(fp):
 
 def _simulate(b, fp, v, nk):
     """yhat = q^-nk B / F' v from zero initial conditions."""
-    return lfilter(np.concatenate([np.zeros(nk), b]), fp, v)
+    return _filt(np.concatenate([np.zeros(nk), b]), fp, v)
 
 
 def _cost(y, yhat):
@@ -98,13 +122,15 @@ def _lstsq(phi, y):
 
 def _arx(v, y, nb, m, nk):
     """ARX least squares: F'(q) y = q^-nk B(q) v + e; returns b, F'."""
-    theta = _lstsq(np.hstack([_delays(v, nk, nb), -_delays(y, 1, m)]), y)
+    theta = _lstsq(np.hstack([_delays(v, nk, nb), -_delays(y, 1, m)]),
+                   np.concatenate(_segs(y)))
     return theta[:nb], np.concatenate([[1.0], theta[nb:]])
 
 
 def _b_given_f(v, y, fp, nb, nk):
     """Least-squares B for a fixed denominator F'."""
-    return _lstsq(_delays(lfilter([1.0], fp, v), nk, nb), y)
+    return _lstsq(_delays(_split(_filt([1.0], fp, v), _segs(v)), nk, nb),
+                  np.concatenate(_segs(y)))
 
 
 def _stabilise(fp):
@@ -122,9 +148,11 @@ def _stabilise(fp):
 def _jacobian(b, fp, v, yhat, nk):
     """d yhat / d [b, f'] by filtering through 1 / F'."""
     nb, m = b.size, fp.size - 1
-    cols = [_delays(lfilter([1.0], fp, v), nk, nb)]
+    segs = _segs(v)
+    cols = [_delays(_split(_filt([1.0], fp, segs), segs), nk, nb)]
     if m:
-        cols.append(-_delays(lfilter([1.0], fp, yhat), 1, m))
+        cols.append(-_delays(_split(_filt([1.0], fp, _split(yhat, segs)),
+                                    segs), 1, m))
     return np.hstack(cols)
 
 
@@ -142,26 +170,29 @@ def _start(v, y, nb, m, nk):
         fp = np.concatenate([[1.0], np.zeros(m)])
     fp = _stabilise(fp)
     b = _b_given_f(v, y, fp, nb, nk)
-    cost = _cost(y, _simulate(b, fp, v, nk))
+    yc = np.concatenate(_segs(y))
+    cost = _cost(yc, _simulate(b, fp, v, nk))
     for _ in range(_SM_ITER if m else 0):
-        b_t, fp_t = _arx(lfilter([1.0], fp, v), lfilter([1.0], fp, y),
-                         nb, m, nk)
+        b_t, fp_t = _arx(_split(_filt([1.0], fp, v), _segs(v)),
+                         _split(_filt([1.0], fp, y), _segs(y)), nb, m, nk)
         if not _max_root(fp_t) < _RADIUS:
             break
-        cost_t = _cost(y, _simulate(b_t, fp_t, v, nk))
+        cost_t = _cost(yc, _simulate(b_t, fp_t, v, nk))
         if not cost_t < cost:
             break
         b, fp, cost = b_t, fp_t, cost_t
     return b, fp
 
 
-def _fit_oe(u, y, nb, nf, nk, integrators, max_iter=100, tol=1e-10):
+def _fit_oe(u, y, nb, nf, nk, integrators, max_iter=100, tol=1e-10,
+            offsets=False):
     """Output-error fit on already scaled arrays (no checks, no scaling).
 
     Parameters
     ----------
-    u, y : ndarray, shape (N,)
-        Input and output, of order one in size.
+    u, y : ndarray, shape (N,), or lists of them
+        Input and output, of order one in size; lists are experiments,
+        each from zero initial conditions, with the cost summed.
     nb, nf, nk, integrators : int
         Orders, delay and number of poles fixed at z = 1.
     max_iter : int
@@ -169,28 +200,48 @@ def _fit_oe(u, y, nb, nf, nk, integrators, max_iter=100, tol=1e-10):
     tol : float
         Stop when the relative (predicted or actual) decrease of the cost
         falls below tol.
+    offsets : bool
+        Also fit a constant output offset per experiment. They enter
+        linearly, so they are projected out (variable projection): each
+        experiment's residual and Jacobian are centred.
 
     Returns
     -------
     dict
         ``B`` (nb,), ``F`` (nf + 1, monic, integrators included), ``Ff``
         (the free factor F'), ``theta`` ([b, f'] free parameters),
-        ``std`` (their standard errors), ``cost``, ``yhat``, ``nit``,
-        ``converged`` and ``message``.
+        ``std`` (their standard errors), ``cost``, ``yhat`` (offsets
+        included), ``offsets`` (one per experiment, zeros unless fitted),
+        ``nit``, ``converged`` and ``message``.
     """
     m = nf - integrators
-    v = u
+    v = _segs(u)
     for _ in range(integrators):
-        v = np.cumsum(v)
-    b, fp = _start(v, y, nb, m, nk)
+        v = [np.cumsum(part) for part in v]
+    ys = _segs(y)
+    y = np.concatenate(ys)
+
+    def centre(x):
+        """Subtract each experiment's mean (rows, for a matrix)."""
+        if not offsets:
+            return x
+        return np.concatenate([part - part.mean(axis=0)
+                               for part in _split(x, ys)])
+
+    def cost_of(yhat):
+        return _cost(centre(y - yhat), 0.0)
+
+    b, fp = _start(v, [centre(part) for part in ys] if offsets else ys,
+                   nb, m, nk)
     theta = np.concatenate([b, fp[1:]])
     yhat = _simulate(b, fp, v, nk)
-    cost = _cost(y, yhat)
+    cost = cost_of(yhat)
     floor = 1e-24 * (0.5 * (y @ y))      # rounding level: an exact fit
     mu, nit, converged = 1e-4, 0, False
     message = f"reached max_iter = {max_iter}"
     for nit in range(max_iter + 1):
-        a, g, d = _normal(_jacobian(b, fp, v, yhat, nk), y - yhat)
+        a, g, d = _normal(centre(_jacobian(b, fp, v, yhat, nk)),
+                          centre(y - yhat))
         gn = np.linalg.lstsq(a, g, rcond=None)[0]
         predicted = 0.5 * (g @ gn)       # decrease of the Gauss-Newton step
         if cost <= floor or predicted <= tol * cost:
@@ -212,7 +263,7 @@ def _fit_oe(u, y, nb, nf, nk, integrators, max_iter=100, tol=1e-10):
                 fp_t = np.concatenate([[1.0], trial[nb:]])
                 if _max_root(fp_t) < _RADIUS:
                     yhat_t = _simulate(trial[:nb], fp_t, v, nk)
-                    cost_t = _cost(y, yhat_t)
+                    cost_t = cost_of(yhat_t)
                     if cost_t < cost:
                         break
             mu = max(10 * mu, 1e-6)
@@ -230,7 +281,8 @@ def _fit_oe(u, y, nb, nf, nk, integrators, max_iter=100, tol=1e-10):
         mu = mu / 10 if mu > 1e-10 else 0.0
         if decrease <= tol:
             nit += 1
-            a, g, d = _normal(_jacobian(b, fp, v, yhat, nk), y - yhat)
+            a, g, d = _normal(centre(_jacobian(b, fp, v, yhat, nk)),
+                              centre(y - yhat))
             converged = True
             message = f"converged: relative decrease {decrease:.1e} <= tol"
             break
@@ -240,19 +292,24 @@ def _fit_oe(u, y, nb, nf, nk, integrators, max_iter=100, tol=1e-10):
         message = (f"pinned at the stability boundary: a free pole has "
                    f"|p| = {radius:.7f}; the data suggest an integrator "
                    f"(try integrators=1 or 'auto')")
-    dof = max(y.size - theta.size, 1)
+    dof = max(y.size - theta.size - (len(ys) if offsets else 0), 1)
     with np.errstate(all='ignore'):
         cov = np.linalg.pinv(a) / np.outer(d, d)
         std = np.sqrt(2 * cost / dof * np.clip(np.diag(cov), 0, None))
     f = fp.copy()
     for _ in range(integrators):
         f = np.convolve(f, [1.0, -1.0])
+    off = np.array([part.mean() for part in _split(y - yhat, ys)]) \
+        if offsets else np.zeros(len(ys))
+    yhat = yhat + np.concatenate([np.full(part.size, c)
+                                  for part, c in zip(ys, off)])
     return dict(B=b.copy(), F=f, Ff=fp.copy(), theta=theta.copy(), std=std,
-                cost=cost, yhat=yhat, nit=nit, converged=bool(converged),
-                message=message)
+                cost=cost, yhat=yhat, offsets=off, nit=nit,
+                converged=bool(converged), message=message)
 
 
-def _fit_oe_auto(us, ys, nb, nf, nk, integrators, max_iter=100, tol=1e-10):
+def _fit_oe_auto(us, ys, nb, nf, nk, integrators, max_iter=100, tol=1e-10,
+                 offsets=False):
     """`_fit_oe` with ``integrators`` an int or 'auto' (scaled data).
 
     'auto' fits 0 integrators, and 1 when the free model has a real pole
@@ -261,15 +318,16 @@ def _fit_oe_auto(us, ys, nb, nf, nk, integrators, max_iter=100, tol=1e-10):
     (None unless 'auto') and a sentence for the message.
     """
     if integrators != 'auto':
-        return (_fit_oe(us, ys, nb, nf, nk, integrators, max_iter, tol),
+        return (_fit_oe(us, ys, nb, nf, nk, integrators, max_iter, tol,
+                        offsets),
                 integrators, None, '')
-    n = us.size
-    out = _fit_oe(us, ys, nb, nf, nk, 0, max_iter, tol)
+    n = sum(part.size for part in _segs(us))
+    out = _fit_oe(us, ys, nb, nf, nk, 0, max_iter, tol, offsets)
     p = nb + nf
     aic = {0: float(n * np.log(max(out['cost'], 1e-300)) + 2 * p), 1: None}
     poles = np.roots(out['Ff']) if nf else np.zeros(0)
     if np.any((poles.real > 0.9) & (np.abs(poles.imag) < 0.1)):
-        out1 = _fit_oe(us, ys, nb, nf, nk, 1, max_iter, tol)
+        out1 = _fit_oe(us, ys, nb, nf, nk, 1, max_iter, tol, offsets)
         aic[1] = float(n * np.log(max(out1['cost'], 1e-300)) + 2 * (p - 1))
     used = int(aic[1] is not None and aic[1] <= aic[0])
     if used:
@@ -386,15 +444,9 @@ def _check_orders(n, nb, nf, nk, integrators):
     return nb, nf, nk, integrators
 
 
-def _check_varying(name, x):
-    if np.ptp(x) <= 1e-14 * np.max(np.abs(x)) or not np.any(x):
-        what = 'all zero' if not np.any(x) else f"all samples = {x[0]:.6g}"
-        raise ValueError(f"{name} is constant ({what}); an output-error fit "
-                         f"needs a varying {name}")
-
-
-def identify_linear(u, y, nb, nf, nk=1, dt=True, integrators=0,
-                    max_iter=100, tol=1e-10, name=None):
+def identify_linear(u, y=None, nb=None, nf=None, nk=1, dt=True,
+                    integrators=0, max_iter=100, tol=1e-10, name=None,
+                    offsets='none'):
     """Fit a linear output-error model B(q) / F(q) q^-nk (MATLAB ``oe``).
 
     The model is y(t) = B(q) / F(q) u(t - nk) + e(t), with
@@ -406,7 +458,10 @@ def identify_linear(u, y, nb, nf, nk=1, dt=True, integrators=0,
     Parameters
     ----------
     u, y : array_like, shape (N,)
-        Input and measured output (finite, real, same length), from rest.
+        Input and measured output (finite, real, same length), from rest;
+        or, in `u` alone, a ``control.TimeResponseData`` or a list of
+        experiments, each from rest, with the cost summed (see
+        `sandwichctl.tools.experiments`; give the orders by keyword).
     nb : int
         Number of B coefficients (>= 1).
     nf : int
@@ -427,6 +482,11 @@ def identify_linear(u, y, nb, nf, nk=1, dt=True, integrators=0,
         by the Gauss-Newton model, falls below tol (default 1e-10).
     name : str, optional
         Name of the returned TransferFunction.
+    offsets : {'none', 'mean', 'estimate'}, optional
+        ``'none'`` (default) uses the data as given; ``'mean'`` removes
+        the means of u and y first; ``'estimate'`` fits a constant output
+        offset per experiment (the model simulated from rest plus
+        ``res.offsets['y']`` reproduces the fit). See `identify`.
 
     Returns
     -------
@@ -456,24 +516,22 @@ def identify_linear(u, y, nb, nf, nk=1, dt=True, integrators=0,
     (array([1.5, 0. ]), array([1. , 0.1, 0.2]))
     """
     start = time.perf_counter()
-    u = check_signal('u', u)
-    y = check_signal('y', y, length=u.size)
+    us, ys, dt, offset_info, estimate = prepare(u, y, dt, offsets)
     dt = check_dt('dt', dt)
-    nb, nf, nk, integrators = _check_orders(u.size, nb, nf, nk, integrators)
+    n = sum(part.size for part in us)
+    nb, nf, nk, integrators = _check_orders(n, nb, nf, nk, integrators)
     max_iter = check_int('max_iter', max_iter, minimum=1)
     tol = check_positive('tol', tol)
     if name is not None and not isinstance(name, str):
         raise TypeError(f"name must be a string or None; got "
                         f"{type(name).__name__} {name!r}")
-    _check_varying('y', y)
-    _check_varying('u', u)
-    n = u.size
-    su = np.sqrt(np.mean(u ** 2))
-    sy = np.sqrt(np.mean(y ** 2))
-    us, ys = u / su, y / sy
+    y = np.concatenate(ys)
+    su = scale(np.concatenate(us))
+    sy = scale(y)
+    us, ys = [part / su for part in us], [part / sy for part in ys]
 
     out, used, aic, choice = _fit_oe_auto(us, ys, nb, nf, nk, integrators,
-                                          max_iter, tol)
+                                          max_iter, tol, estimate)
     if aic is not None:                 # AIC in the user's units
         aic = {k: None if v is None else v + n * np.log(sy ** 2)
                for k, v in aic.items()}
@@ -506,4 +564,7 @@ def identify_linear(u, y, nb, nf, nk=1, dt=True, integrators=0,
         fit=float(fit), cost=float(cost), yhat=yhat, residuals=resid,
         theta=theta, std=std, theta_labels=labels, aic=aic, nit=out['nit'],
         elapsed=time.perf_counter() - start, success=bool(success),
-        message=message, dt=dt, scales=(float(su), float(sy)))
+        message=message, dt=dt, scales=(float(su), float(sy)),
+        offsets=dict(offset_info, y=list(out['offsets'] * sy)
+                     if estimate else offset_info['y']),
+        n_experiments=len(us))

@@ -31,6 +31,7 @@ import numpy as np
 from scipy.signal import lfilter
 from tqdm.auto import tqdm
 
+from ._data import prepare
 from ._nested import splits
 from ._oe import lm
 from ._predictor import padding, stable_and_finite
@@ -38,7 +39,7 @@ from .batch import Problem, refine as _refine, _progress_range, \
     _warn_poorly_determined, _admissible_start, MIN_FIT
 from .linear import _fit_oe, oe_transfer_function
 from .recursive import RecursiveIdentifier, DEFAULTS
-from .._checks import check_signal, check_int, check_positive
+from .._checks import check_int, check_positive
 
 __all__ = ['identify']
 
@@ -47,16 +48,21 @@ OE_DEFAULTS = dict(widths=(0.05, 0.25), screen_iter=8, keep=3, max_iter=200,
                    tol=1e-10, min_fit=MIN_FIT, sp_iter=15, sp_starts=4,
                    n_random=6, seed=0)
 
-def identify(u, y, na, nb, nc, nd, q1=1, q2=1, method='oe', theta0=None,
-             dt=True, refine=None, progress=False, integrators='auto',
-             integrator_block='L1', name=None, **options):
+def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
+             method='oe', theta0=None, dt=True, refine=None, progress=False,
+             integrators='auto', integrator_block='L1', name=None,
+             offsets='none', **options):
     r"""Identify a sandwich system from input/output data.
 
     Parameters
     ----------
     u, y : array_like, shape (N,)
         Measured input and output (the system starts at rest), in any
-        units: the result does not depend on them.
+        units: the result does not depend on them. Instead of two arrays,
+        `u` may be a ``control.TimeResponseData`` (its time vector gives
+        dt) or a list of experiments (pairs or records), each from its own
+        initial state, with the cost summed; then give the orders by
+        keyword (`sandwichctl.tools.experiments`).
     na, nb, nc, nd : int
         Orders of eq. (2.1); nb and nd count coefficients after b0 and
         d0. na and nc count integrators too. The returned model has
@@ -87,6 +93,18 @@ def identify(u, y, na, nb, nc, nd, q1=1, q2=1, method='oe', theta0=None,
         position integrates the speed before the play).
     name : str, optional
         Name of the identified model.
+    offsets : {'none', 'mean', 'estimate'}, optional
+        ``'none'`` (default): the data are used as given, from rest. An
+        estimated output offset is nearly confounded with the asymmetry of
+        the backlash (shifting both thresholds by d shifts the output by
+        about m L2(1) d), so on data without offsets it costs accuracy on
+        D1 and D2; hence not the default. For real data with offsets:
+        ``'mean'`` removes each experiment's means of u and y first (quick;
+        not for integrating plants, whose drift it changes), and
+        ``'estimate'`` fits a constant output offset per experiment with
+        the data as given (also the initial position of an integrating
+        plant). The recursive methods take 'none' or 'mean'.
+        ``res.offsets`` says what was done.
     **options
         ``'oe'``: widths (relative backlash widths the starts open to,
         default (0.05, 0.25)), screen_iter (8), keep (3), max_iter (200),
@@ -127,16 +145,16 @@ def identify(u, y, na, nb, nc, nd, q1=1, q2=1, method='oe', theta0=None,
     >>> res.fit > res.linear['fit']
     True
     """
-    u = check_signal('u', u)
-    y = check_signal('y', y)
-    if u.size != y.size:
-        raise ValueError(f"u and y must have the same length; got "
-                         f"{u.size} and {y.size} samples")
-    _check_varying('u', u, "a constant input cannot excite the backlash "
-                   "or identify the dynamics. Use a persistently exciting "
-                   "input (e.g. noise, or steps plus sines)")
-    _check_varying('y', y, "there is nothing to identify (is the sensor "
-                   "connected, or the right channel selected?)")
+    if isinstance(y, numbers.Integral) and not isinstance(y, bool):
+        raise TypeError("with a record or a list of experiments, give the "
+                        "orders by keyword: identify(data, na=..., nb=..., "
+                        "nc=..., nd=...)")
+    missing = [k for k, v in zip(('na', 'nb', 'nc', 'nd'), (na, nb, nc, nd))
+               if v is None]
+    if missing:
+        raise TypeError(f"identify needs the orders {missing} (e.g. "
+                        f"identify(u, y, na=2, nb=0, nc=2, nd=1))")
+    us, ys, dt, offset_info, estimate = prepare(u, y, dt, offsets)
     methods = ('oe',) + tuple(DEFAULTS)
     if not isinstance(method, str) or method not in methods:
         raise ValueError(f"method must be one of {list(methods)}; got "
@@ -149,9 +167,10 @@ def identify(u, y, na, nb, nc, nd, q1=1, q2=1, method='oe', theta0=None,
                   (na, nb, nc, nd, q1, q2))}
     p = orders['na'] + orders['nb'] + orders['nc'] + orders['nd'] + 4
     needed = 10 * p + padding(tuple(orders.values()))
-    if u.size < needed:
+    n_samples = sum(part.size for part in us)
+    if n_samples < needed:
         raise ValueError(
-            f"u and y have {u.size} samples, too few for {p} parameters "
+            f"the data have {n_samples} samples, too few for {p} parameters "
             f"with these orders and delays; give at least {needed}")
     if method == 'oe':
         if refine not in (None, True):
@@ -161,19 +180,19 @@ def identify(u, y, na, nb, nc, nd, q1=1, q2=1, method='oe', theta0=None,
         if theta0 is not None:
             raise ValueError("theta0 applies to the recursive methods; "
                              "method='oe' starts from the linear fit")
-        result = _identify_oe(u, y, orders, dt, name, integrators,
-                              integrator_block, progress, options)
+        result = _identify_oe(us, ys, orders, dt, name, integrators,
+                              integrator_block, progress, options, estimate)
     else:
-        result = _identify_recursive(u, y, orders, method, theta0, dt,
-                                     refine, progress, name, options)
-    _check_excitation(result, u)
+        if len(us) > 1:
+            raise ValueError(f"method={method!r} is recursive and takes one "
+                             f"experiment; got {len(us)} (use method='oe')")
+        result = _identify_recursive(us[0], ys[0], orders, method, theta0,
+                                     dt, refine, progress, name, options)
+        if estimate:               # the recursive methods fit no offset
+            offset_info['method'] = 'none'
+    result.offsets = dict(offset_info, **(result.get('offsets') or {}))
+    _check_excitation(result, us)
     return result
-
-
-def _check_varying(name, x, why):
-    if np.ptp(x) <= 1e-14 * np.max(np.abs(x)):
-        what = 'all zero' if not np.any(x) else f"all samples = {x[0]:.6g}"
-        raise ValueError(f"{name} is constant ({what}); {why}")
 
 
 def _oe_options(options):
@@ -216,7 +235,10 @@ def _integrator_split(k, orders, block):
 
 
 def _l1_std(st, phi, u):
-    """Standard deviation of x = L1[u] for the start phi (scaled data)."""
+    """Standard deviation of x = L1[u] for the start phi (scaled data, one
+    array or a list of experiments)."""
+    if isinstance(u, list):
+        u = np.concatenate(u)
     theta = st.theta(phi)
     na, nb, nc, nd, q1, q2 = st.o
     a = theta[nc:nc + na]
@@ -227,7 +249,7 @@ def _l1_std(st, phi, u):
 
 
 def _identify_oe(u, y, orders, dt, name, integrators, block, progress,
-                 options):
+                 options, offsets):
     opt = _oe_options(options)
     start = time.perf_counter()
     if not (integrators == 'auto' or (isinstance(integrators,
@@ -246,26 +268,26 @@ def _identify_oe(u, y, orders, dt, name, integrators, block, progress,
     shape = (o['nb'] + o['nd'] + 1, nf_l, o['q1'] + o['q2'])
     if integrators == 'auto':
         free = _fit_oe(scaled.u, scaled.y, *shape, 0, opt['max_iter'],
-                       opt['tol'])
+                       opt['tol'], offsets)
         poles = np.roots(free['Ff']) if nf_l else np.zeros(0)
         slow = bool(np.any((poles.real > 0.9) & (np.abs(poles.imag) < 0.1)))
         linears = {0: free}
         if slow:
             linears[1] = _fit_oe(scaled.u, scaled.y, *shape, 1,
-                                 opt['max_iter'], opt['tol'])
+                                 opt['max_iter'], opt['tol'], offsets)
     else:
         linears = {integrators: _fit_oe(scaled.u, scaled.y, *shape,
                                         integrators, opt['max_iter'],
-                                        opt['tol'])}
+                                        opt['tol'], offsets)}
     fits = {k: _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt,
-                             name, progress)
+                             name, progress, offsets)
             for k, lin in linears.items()}
     # several integrator counts: the lower AIC of the sandwich fits
-    n = u.size
+    n = sum(part.size for part in u)
 
     def aic(k):
         prob, out, _ = fits[k]
-        return n * np.log(max(out['cost'], 1e-300)) + 2 * prob.st.q
+        return n * np.log(max(out["cost"], 1e-300)) + 2 * prob.st.size
 
     k = min(fits, key=aic)
     prob, best, linear = fits[k]
@@ -282,16 +304,17 @@ def _identify_oe(u, y, orders, dt, name, integrators, block, progress,
 
 
 def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
-                  progress):
+                  progress, offsets):
     """The sandwich of `orders` with k integrators, from the linear fit
     `lin` (on data scaled like `Problem`'s): (problem, best lm, linear)."""
     nb_l, nf_l, nk_l = shape
     i1, i2 = _integrator_split(k, orders, block)
     sign = -1 if lin['B'][0] < 0 else 1
-    probs = {sign: Problem(u, y, orders, i1, i2, sign, dt, name)}
+    probs = {sign: Problem(u, y, orders, i1, i2, sign, dt, name, offsets)}
     prob = probs[sign]
-    r_lin = y - lin['yhat'] * prob.sy
-    denom = np.linalg.norm(y - y.mean())
+    y_all = np.concatenate(y)
+    r_lin = y_all - lin['yhat'] * prob.sy
+    denom = np.linalg.norm(y_all - y_all.mean())
     linear = {
         'fit': float(100 * (1 - np.linalg.norm(r_lin) / denom)),
         'cost': 0.5 * float(r_lin @ r_lin), 'cost_scaled': lin['cost'],
@@ -300,16 +323,22 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
                                       lin['F'], nk_l, dt),
         'converged': lin['converged'], 'message': lin['message']}
     # exact sandwich starts of the linear fit, closed and opened
-    starts = [(sign, phi) for phi in splits(prob.st, sign * lin['B'],
-                                            lin['F'])]
+    def extend(s, phi):
+        """A model start with the linear fit's output offsets."""
+        return np.concatenate([phi[:probs[s].st.q],
+                               s * lin['offsets'][:probs[s].st.n_off]])
+
+    starts = [(sign, extend(sign, phi))
+              for phi in splits(prob.st, sign * lin['B'], lin['F'])]
     B = lin['B']
     if abs(B[0]) < 0.2 * np.max(np.abs(B)):
         # the sign of a small leading coefficient is uncertain: also try
         # the other sign, from the linear fit with that coefficient flipped
-        probs[-sign] = Problem(u, y, orders, i1, i2, -sign, dt, name)
+        probs[-sign] = Problem(u, y, orders, i1, i2, -sign, dt, name,
+                               offsets)
         flipped = B.copy()
         flipped[0] = -B[0]
-        starts += [(-sign, phi) for phi in
+        starts += [(-sign, extend(-sign, phi)) for phi in
                    splits(probs[-sign].st, -sign * flipped, lin['F'])]
     if not starts:
         raise ValueError(
@@ -339,8 +368,9 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
         rng = np.random.default_rng(opt['seed'])
         seeds = widest + [(out['sign'], out['phi'])
                           for out in screened[:opt['sp_starts']]]
-        seeds += [(sign, _random_start(probs[sign].st, probs[sign].u, rng))
-                  for _ in range(opt['n_random'])]
+        seeds += [(sign, probs[sign].st.extend(
+            _random_start(probs[sign].st, probs[sign].u, rng)))
+            for _ in range(opt['n_random'])]
         for s, phi in seeds:
             p = probs[s]
             out = lm(p.st, phi, p.u, p.y, opt['sp_iter'], sp=True)
@@ -367,18 +397,18 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
     if best['cost'] > lin['cost'] or not np.isfinite(best['cost']):
         # the linear model itself, as a sandwich with a closed backlash:
         # a sandwich fit is never worse than the linear fit it nests
-        best = _linear_as_sandwich(probs[sign], lin, u)
+        best = _linear_as_sandwich(probs[sign], lin, extend)
     best['n_starts'] = len(cands)
     return probs[best['sign']], best, linear
 
 
-def _linear_as_sandwich(prob, lin, u):
+def _linear_as_sandwich(prob, lin, extend):
     """The exact closed-backlash sandwich of the linear fit, as an `lm`
     output (the zero radius of its structure lifted to hold the linear
     fit's zeros)."""
     st = prob.st
     st.zero_radius = np.inf
-    phi = splits(st, prob.sign * lin['B'], lin['F'])[0]
+    phi = extend(prob.sign, splits(st, prob.sign * lin['B'], lin['F'])[0])
     out = lm(st, phi, prob.u, prob.y, max_iter=1)
     out['sign'] = prob.sign
     out['converged'] = True
@@ -450,9 +480,11 @@ def _recursive_start(prob, orders):
     try:
         with warnings.catch_warnings():
             warnings.simplefilter('ignore')
+            longest = int(np.argmax([part.size for part in prob.u]))
+            u, y = prob.u[longest], prob.y[longest]
             est = RecursiveIdentifier(*orders.values(), method='rpem',
-                                      warmup=prob.u.size)
-            est.update_many(prob.u, prob.y)
+                                      warmup=u.size)
+            est.update_many(u, y)
         phi = _admissible_start(st, st.phi(est.theta), 1e-9)
     except (ValueError, RuntimeError, np.linalg.LinAlgError):
         return []
@@ -495,11 +527,12 @@ def _identify_recursive(u, y, orders, method, theta0, dt, refine, progress,
     return result
 
 
-def _check_excitation(result, u):
+def _check_excitation(result, us):
     """Warn if the identified backlash barely leaves its memory zone."""
     model = result.model
     with np.errstate(all='ignore'):
-        x = model.simulate(u, internal=True).outputs[1]
+        x = np.concatenate([model.simulate(u, internal=True).outputs[1]
+                            for u in us])
     if not np.all(np.isfinite(x)):
         result.excitation = np.nan          # unstable estimate: said already
         return

@@ -31,6 +31,7 @@ import numpy as np
 import control as ct
 
 from ..model.sandwich import SandwichSystem
+from .experiments import as_experiments
 from .._checks import check_signal, check_int
 
 __all__ = ['fit_percent', 'nrmse', 'max_relative_error', 'compare',
@@ -306,7 +307,7 @@ class CompareResultList(list):
         return '\n'.join(lines)
 
 
-def compare(model, u, y, ax=None, initial_state=None, timepts=None,
+def compare(model, u, y=None, ax=None, initial_state=None, timepts=None,
             labels=None, plot=True, horizon=None):
     r"""Simulate (or predict) model(s) on measured data and compare.
 
@@ -350,7 +351,9 @@ def compare(model, u, y, ax=None, initial_state=None, timepts=None,
         transfer functions). Every model must be single-input,
         single-output.
     u : array_like, shape (N,)
-        Measured input.
+        Measured input; or, without `y`, a ``control.TimeResponseData``
+        (its time vector labels the plot) or a list of experiments, each
+        compared in turn (a list of results is returned).
     y : array_like, shape (N,)
         Measured output.
     ax : matplotlib.axes.Axes, optional
@@ -417,6 +420,15 @@ def compare(model, u, y, ax=None, initial_state=None, timepts=None,
     >>> one.horizon
     1
     """
+    if y is None:
+        data = as_experiments(u)
+        if len(data) > 1:
+            return [compare(model, uu, yy, ax=None,
+                            initial_state=initial_state, labels=labels,
+                            plot=plot, horizon=horizon) for uu, yy in data]
+        (u, y), = data
+        if timepts is None and data.dt is not True:
+            timepts = data.dt * np.arange(u.size)
     many = isinstance(model, (list, tuple))
     models = list(model) if many else [model]
     if not models:

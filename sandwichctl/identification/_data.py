@@ -1,0 +1,74 @@
+"""Measured data and their offsets, as every identifier reads them (private).
+
+`prepare` turns the user's data (arrays, records or lists of experiments,
+see `sandwichctl.tools.experiments`) into lists of input and output arrays
+and applies the offset choice:
+
+``'none'`` (the default)
+    The data are used as given and no offset is fitted: the model is
+    simulated from rest on the input as measured. (An estimated output
+    offset is nearly confounded with the asymmetry of the backlash:
+    shifting both thresholds by d shifts the output by about m L2(1) d.
+    On data without offsets it therefore costs accuracy on D1 and D2.)
+``'mean'``
+    The means of u and y are removed from each experiment before the fit
+    (quick, and common practice for linear models; for an integrating
+    plant it changes the drift, so prefer 'estimate' there).
+``'estimate'``
+    A constant output offset per experiment is estimated with the model
+    (the sandwich has no bias term; an output offset is also the initial
+    position of an integrating plant). The data are used as given; an
+    input offset shifts x, which the backlash's two thresholds absorb.
+
+The result's ``offsets`` says what was done: the method, and per
+experiment the removed or estimated input and output offsets.
+"""
+
+import numpy as np
+
+from ..tools.experiments import as_experiments
+
+__all__ = []
+
+OFFSETS = ('none', 'mean', 'estimate')
+
+
+def prepare(u, y, dt, offsets):
+    """(us, ys, dt, info, estimate) for the identifiers.
+
+    `dt` True means "not given": records supply their own.
+    """
+    if not isinstance(offsets, str) or offsets not in OFFSETS:
+        raise ValueError(f"offsets must be one of {list(OFFSETS)}; got "
+                         f"{offsets!r}")
+    data = as_experiments(u, y, dt=None if dt is True else dt)
+    us, ys = data.u, data.y
+    check_varying('u', us, "a constant input cannot excite the backlash or "
+                  "identify the dynamics. Use a persistently exciting input "
+                  "(e.g. noise, or steps plus sines)")
+    check_varying('y', ys, "there is nothing to identify (is the sensor "
+                  "connected, or the right channel selected?)")
+    n_exp = len(us)
+    info = {'method': offsets, 'u': [0.0] * n_exp, 'y': [0.0] * n_exp}
+    if offsets == 'mean':
+        info['u'] = [float(part.mean()) for part in us]
+        info['y'] = [float(part.mean()) for part in ys]
+        us = [part - c for part, c in zip(us, info['u'])]
+        ys = [part - c for part, c in zip(ys, info['y'])]
+    return us, ys, data.dt, info, offsets == 'estimate'
+
+
+def scale(x):
+    """A positive scale of a signal: its standard deviation (RMS if flat)."""
+    s = float(np.std(x))
+    if not s > 0:
+        s = float(np.sqrt(np.mean(np.square(x))))
+    return s if s > 0 else 1.0
+
+
+def check_varying(name, parts, why):
+    """Refuse a signal that is constant over all experiments."""
+    x = np.concatenate(parts)
+    if np.ptp(x) <= 1e-14 * np.max(np.abs(x)):
+        what = 'all zero' if not np.any(x) else f"all samples = {x[0]:.6g}"
+        raise ValueError(f"{name} is constant ({what}); {why}")

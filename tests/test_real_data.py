@@ -1,0 +1,111 @@
+"""Real-data forms (issue 13): python-control records, several experiments
+and offsets, for identify, identify_linear and refine."""
+
+import warnings
+
+import numpy as np
+import pytest
+import control as ct
+
+import sandwichctl as sw
+
+
+@pytest.fixture(scope='module')
+def two_runs():
+    plant = sw.examples.paper_plant(dt=0.01)
+    runs = []
+    for seed in (31, 32):
+        u = sw.examples.paper_input(1500, seed=seed)
+        y = sw.examples.add_noise(plant.simulate(u).outputs, 200,
+                                  seed=seed + 100)
+        runs.append((u, y))
+    return plant, runs
+
+
+def _record(u, y, dt):
+    return ct.TimeResponseData(dt * np.arange(u.size), y, inputs=u)
+
+
+def test_record_gives_dt(two_runs):
+    plant, runs = two_runs
+    res = sw.identify(_record(*runs[0], 0.01), **plant.orders)
+    assert res.success and res.model.dt == pytest.approx(0.01)
+    ref = sw.identify(*runs[0], **plant.orders)
+    assert res.fit == pytest.approx(ref.fit, abs=1e-9)
+
+
+def test_several_experiments_sum_their_costs(two_runs):
+    plant, runs = two_runs
+    res = sw.identify([_record(u, y, 0.01) for u, y in runs], **plant.orders)
+    assert res.success and res.n_experiments == 2
+    assert sw.parameter_error(res.theta, plant.theta) < 0.02
+    cost = sum(0.5 * np.sum((y - res.model.simulate(u).outputs) ** 2)
+               for u, y in runs)
+    assert res.cost == pytest.approx(cost, rel=1e-9)
+    assert res.cost <= res.linear['cost'] * (1 + 1e-9)
+    lin = sw.identify_linear(runs, nb=2, nf=4, nk=2)
+    assert lin.success and lin.n_experiments == 2
+    ref = sw.refine(res.model, runs)
+    assert ref.cost <= res.cost * (1 + 1e-9)
+
+
+@pytest.mark.parametrize('data, match', [
+    (lambda r: [_record(*r[0], 0.01), _record(*r[1], 0.02)],
+     'share the sampling time'),
+    (lambda r: ct.TimeResponseData(np.r_[0, np.cumsum(np.ones(1499))
+                                         * 0.01 * (1 + 0.1 * (
+                                             np.arange(1499) == 7))],
+                                   r[0][1], inputs=r[0][0]),
+     'not evenly spaced'),
+    (lambda r: [(r[0][0], r[0][1][:-1])], 'same length'),
+    (lambda r: [(r[0][0], np.r_[r[0][1][:-1], np.nan])], 'finite'),
+    (lambda r: [], 'empty'),
+])
+def test_bad_records_are_refused(two_runs, data, match):
+    plant, runs = two_runs
+    with pytest.raises(ValueError, match=match):
+        sw.identify(data(runs), **plant.orders)
+
+
+def test_continuous_time_and_positional_orders_are_refused(two_runs):
+    plant, runs = two_runs
+    with pytest.raises(ValueError, match='continuous-time'):
+        sw.identify(*runs[0], **plant.orders, dt=0)
+    with pytest.raises(TypeError, match='by keyword'):
+        sw.identify(_record(*runs[0], 0.01), 2, 0, 2, 1)
+    with pytest.raises(ValueError, match='offsets must be one of'):
+        sw.identify(*runs[0], **plant.orders, offsets='detrend')
+
+
+def test_offsets_mean_and_estimate(two_runs):
+    plant, runs = two_runs
+    u, y = runs[0]
+    u_off, y_off = u + 3.0, y - 40.0
+    # 'mean' removes the means and says so
+    res = sw.identify(u_off, y_off, **plant.orders, offsets='mean')
+    assert res.offsets['method'] == 'mean'
+    assert res.offsets['u'][0] == pytest.approx(u_off.mean())
+    assert res.offsets['y'][0] == pytest.approx(y_off.mean())
+    # 'estimate' fits the output offset with the input as given
+    res = sw.identify(u, y_off, **plant.orders, offsets='estimate')
+    assert res.success and res.offsets['method'] == 'estimate'
+    assert res.offsets['y'][0] == pytest.approx(-40.0, abs=0.5)
+    y_hat = res.model.simulate(u).outputs + res.offsets['y'][0]
+    assert sw.fit_percent(y_off, y_hat) == pytest.approx(res.fit, abs=1e-6)
+    # without it, the same data fit far worse
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        none = sw.identify(u, y_off, **plant.orders)
+    assert none.offsets['method'] == 'none' and none.fit < res.fit - 5
+    lin = sw.identify_linear(u, y_off, nb=2, nf=4, nk=2, offsets='estimate')
+    assert lin.offsets['y'][0] == pytest.approx(-40.0, abs=1.0)
+
+
+def test_compare_takes_records_and_experiments(two_runs):
+    plant, runs = two_runs
+    one = sw.compare(plant, _record(*runs[0], 0.01), plot=False)
+    assert one.fit == pytest.approx(sw.compare(plant, *runs[0],
+                                               plot=False).fit)
+    both = sw.compare(plant, [_record(u, y, 0.01) for u, y in runs],
+                      plot=False, horizon=1)
+    assert len(both) == 2 and all(r.fit > 80 and r.horizon == 1 for r in both)
