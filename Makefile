@@ -2,6 +2,9 @@
 #   make demo   -- reproduce the paper's Section 5 study (figures in out/)
 #   make test   -- run the test suite (unit tests, doctests, notebooks, docs)
 #   make docs   -- build the documentation site into docs/_build/html
+#   make docs-check -- build it and look at it in headless Chromium
+#                  (screenshots in docs/_build/screenshots; needs chromium:
+#                  sudo apt-get install -y chromium)
 #   make bench  -- run every benchmark script
 # Both create the virtual environment .venv and install sandwichctl into it
 # the first time.
@@ -11,7 +14,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test bench docs clean
+.PHONY: demo test bench docs docs-check clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -25,8 +28,15 @@ demo: $(STAMP)
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
 
+# The notebooks are executed at build time through jupyter-cache, which
+# re-runs a notebook only when its code changes; the cache is cleared so
+# that the pages show what the current package computes.
 docs: $(STAMP)
-	$(BIN)/python -m sphinx -W -b html docs docs/_build/html
+	rm -rf docs/_build/.jupyter_cache
+	env -u MPLBACKEND $(BIN)/python -m sphinx -W -n -b html docs docs/_build/html
+
+docs-check: $(STAMP)
+	$(BIN)/python tools/docs_check.py
 
 bench: $(STAMP)
 	for f in benchmarks/bench_*.py; do $(BIN)/python $$f || exit 1; done

@@ -18,6 +18,11 @@ is also available here (``sw.identify``, ``sw.SandwichSystem``, ...):
 - `paper`: the paper's example plants and its Section 5 and 6 studies
   (``sw.paper.section5``, ...); ``sw.examples`` is `paper.examples`.
 
+Warnings have their own categories, so they can be filtered:
+`SandwichWarning` (every warning of the package), its subclasses
+`IdentificationWarning` (and its subclass `ExcitationWarning`) and
+`SimulationWarning`.
+
 Dependencies run one way: `paper` uses `identification`, `design` and
 `tools`, which use `model`.
 
@@ -31,8 +36,11 @@ from .tools import *
 from .identification import *
 from .design import *
 from .paper import examples
+from ._checks import (SandwichWarning, IdentificationWarning,
+                      ExcitationWarning, SimulationWarning)
 
 __version__ = '0.1.0'
 
 __all__ = (model.__all__ + tools.__all__ + identification.__all__
-           + design.__all__ + ['data', 'examples', 'paper'])
+           + design.__all__ + _checks.__all__
+           + ['data', 'examples', 'paper'])

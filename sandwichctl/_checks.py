@@ -1,17 +1,103 @@
-"""Argument checks shared by the public functions (private module).
+"""Argument checks and warning categories shared by the package (private).
 
-Every check raises ``ValueError`` or ``TypeError`` with a message that
-names the argument, says what was received and what is expected.
+Every public function checks its arguments at the door with these
+functions. Each check raises ``TypeError`` (wrong kind of object: a
+string, None, a boolean or a complex number where a real number is
+expected) or ``ValueError`` (right kind, wrong value: NaN, a negative
+order, a wrong shape) with a message that names the argument, says what
+was received and what is expected.
+
+The warning categories are public (``sw.SandwichWarning``, ...) so that
+users can filter them; `warn` issues one with the stack level of the
+user's own line.
 """
 
 import numbers
+import os
+import sys
+import warnings
 
 import numpy as np
 import control as ct
 
-__all__ = []
+__all__ = ['SandwichWarning', 'IdentificationWarning', 'ExcitationWarning',
+           'SimulationWarning']
+
+#: Largest order or delay (in samples) accepted anywhere: a linear block
+#: of eq. (2.1) with more states than this is a typo (``q1=10**6``) that
+#: would otherwise take minutes and gigabytes before failing.
+MAX_ORDER = 1000
 
 
+# ----------------------------------------------------------------------
+# Warning categories
+# ----------------------------------------------------------------------
+class SandwichWarning(UserWarning):
+    """Base class of every warning sandwichctl issues.
+
+    Silence them all with
+    ``warnings.simplefilter('ignore', sw.SandwichWarning)``, or turn them
+    into errors with ``'error'``.
+    """
+
+
+class IdentificationWarning(SandwichWarning, RuntimeWarning):
+    """An identification finished, but its result needs care.
+
+    For example: the estimate diverged or hit an iteration limit, some
+    parameters are poorly determined by the data, or the data do not
+    support the backlash. ``res.success`` and ``res.message`` say more.
+    It is also a RuntimeWarning, as these warnings were before.
+    """
+
+
+class ExcitationWarning(IdentificationWarning):
+    """The input does not excite the system enough to identify it.
+
+    For example: the backlash of the model hardly leaves its memory zone
+    (the input amplitude is smaller than the dead band), or the input is
+    constant over most of the record.
+    """
+
+
+class SimulationWarning(SandwichWarning, RuntimeWarning):
+    """A simulation produced non-finite values (an unstable system or an
+    input too large), or was asked for something it can only approximate.
+    """
+
+
+_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__)) + os.sep
+_CONTROL_DIR = os.path.dirname(os.path.abspath(ct.__file__)) + os.sep
+
+
+def user_stacklevel():
+    """Stack level of the first frame outside sandwichctl and python-control.
+
+    Called from the function that warns, so that ``warnings.warn(...,
+    stacklevel=user_stacklevel())`` points at the user's line however deep
+    in the package the warning is raised (python-control frames are
+    skipped too, for systems simulated by ``ct.input_output_response``).
+    """
+    frame = sys._getframe(1)       # the function that is about to warn
+    level = 1
+    while frame is not None:
+        path = os.path.abspath(frame.f_code.co_filename)
+        if not (path.startswith(_PACKAGE_DIR)
+                or path.startswith(_CONTROL_DIR)):
+            return level
+        frame = frame.f_back
+        level += 1
+    return 1
+
+
+def warn(message, category=SandwichWarning):
+    """Issue `message` as `category`, attributed to the user's line."""
+    warnings.warn(message, category, stacklevel=user_stacklevel())
+
+
+# ----------------------------------------------------------------------
+# Scalars
+# ----------------------------------------------------------------------
 def check_positive(name, value):
     """Return `value` as float, requiring 0 < value < inf."""
     value = _as_real_scalar(name, value)
@@ -38,30 +124,169 @@ def check_finite(name, value):
     return value
 
 
-def check_int(name, value, minimum=0):
-    """Return `value` as int, requiring an integer >= `minimum`."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+def check_int(name, value, minimum=0, maximum=None):
+    """Return `value` as int, requiring an integer in [minimum, maximum].
+
+    Booleans and floats (even 2.0) are refused: an order or a length is
+    counted, not measured.
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(
+            value, numbers.Integral):
         raise TypeError(
             f"{name} must be an integer >= {minimum}; got "
             f"{type(value).__name__} {value!r}")
     if value < minimum:
         raise ValueError(f"{name} must be an integer >= {minimum}; "
                          f"got {value}")
+    if maximum is not None and value > maximum:
+        raise ValueError(f"{name} must be an integer <= {maximum}; got "
+                         f"{value}")
     return int(value)
+
+
+def check_order(name, value):
+    """An order or delay of eq. (2.1): an integer in [0, MAX_ORDER]."""
+    return check_int(name, value, 0, MAX_ORDER)
+
+
+def check_bool(name, value):
+    """Return `value` as bool, requiring True or False (numpy's too)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be True or False; got "
+                        f"{type(value).__name__} {value!r}")
+    return bool(value)
+
+
+def check_option(name, value, allowed):
+    """Return `value`, requiring one of `allowed` (ValueError lists them)."""
+    if isinstance(value, (bool, np.bool_)) and not any(
+            isinstance(a, bool) for a in allowed):
+        ok = False
+    else:
+        try:
+            ok = value in allowed
+        except TypeError:          # unhashable
+            ok = False
+    if not ok:
+        choices = ', '.join(repr(a) for a in allowed)
+        raise ValueError(f"{name} must be one of {choices}; got {value!r}")
+    return value
+
+
+def check_name(name, value):
+    """A system name: a string or None."""
+    if value is not None and not isinstance(value, str):
+        raise TypeError(f"{name} must be a string or None; got "
+                        f"{type(value).__name__} {value!r}")
+    return value
+
+
+def check_label(name, value, what='signal'):
+    """The name of the single input, output or signal of a SISO system.
+
+    A string, or a list or tuple holding exactly one string; returns the
+    string.
+    """
+    if isinstance(value, (list, tuple)):
+        if len(value) != 1:
+            raise ValueError(
+                f"{name} must name the one {what} of this system; got "
+                f"{len(value)} names {list(value)!r}")
+        value = value[0]
+    if not isinstance(value, str) or not value:
+        raise TypeError(f"{name} must be a non-empty string (the {what}'s "
+                        f"name); got {type(value).__name__} {value!r}")
+    return value
+
+
+def check_labels(name, value, count):
+    """A list of exactly `count` distinct non-empty strings."""
+    if isinstance(value, str) or not isinstance(value, (list, tuple)):
+        raise TypeError(f"{name} must be a list of {count} strings; got "
+                        f"{type(value).__name__} {value!r}")
+    if len(value) != count:
+        raise ValueError(f"{name} must hold {count} names; got "
+                         f"{len(value)}: {list(value)!r}")
+    for item in value:
+        if not isinstance(item, str) or not item:
+            raise TypeError(f"{name} must hold non-empty strings; got "
+                            f"{type(item).__name__} {item!r}")
+    if len(set(value)) != count:
+        raise ValueError(f"{name} must hold distinct names; got "
+                         f"{list(value)!r}")
+    return list(value)
+
+
+def check_dt(name, dt):
+    """A discrete sampling time: a finite number > 0, or True (unspecified).
+
+    Returns it unchanged (an integer stays an integer, as in
+    python-control).
+    """
+    if dt is True:
+        return dt
+    if isinstance(dt, (bool, np.bool_)) or dt is None or not isinstance(
+            dt, (numbers.Real, np.floating, np.integer)):
+        raise TypeError(
+            f"{name} must be a positive sampling time or True (discrete, "
+            f"unspecified); got {type(dt).__name__} {dt!r}. sandwichctl's "
+            f"systems are discrete-time")
+    if not (np.isfinite(dt) and dt > 0):
+        raise ValueError(
+            f"{name} must be a positive sampling time (finite, > 0) or True "
+            f"(discrete, unspecified); got {dt!r}")
+    return dt.item() if isinstance(dt, np.generic) else dt
+
+
+# ----------------------------------------------------------------------
+# Arrays
+# ----------------------------------------------------------------------
+def _real_array(name, values, what):
+    """`values` as a float array; refuse strings, None, bool and complex."""
+    if _is_str(values) or values is None:
+        raise TypeError(f"{name} must be {what}; got "
+                        f"{type(values).__name__} {values!r}")
+    if isinstance(values, ct.TimeResponseData):
+        raise TypeError(f"{name} must be {what}; got a TimeResponseData "
+                        f"(pass resp.inputs or resp.outputs)")
+    try:
+        raw = np.asarray(values)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be {what}; got "
+                        f"{type(values).__name__}") from None
+    if raw.dtype.kind == 'c':
+        raise TypeError(f"{name} must be real; got complex values (take "
+                        f".real explicitly if the imaginary part is "
+                        f"rounding)")
+    if raw.dtype.kind == 'b':
+        raise TypeError(f"{name} must hold numbers; got booleans")
+    if raw.dtype.kind not in 'iuf':
+        try:
+            items = raw.ravel().tolist()
+        except Exception:                       # pragma: no cover
+            items = []
+        for item in items:
+            if (item is None or _is_str(item) or isinstance(item, bool)
+                    or isinstance(item, complex)
+                    or not isinstance(item, (numbers.Real, np.generic))):
+                raise TypeError(f"{name} must hold real numbers; got "
+                                f"{type(item).__name__} {item!r}")
+        try:
+            raw = raw.astype(float)
+        except (TypeError, ValueError):
+            raise TypeError(f"{name} must be {what}; got "
+                            f"{type(values).__name__}") from None
+    return np.asarray(raw, dtype=float)
 
 
 def check_signal(name, values, length=None):
     """Return a finite 1-D float array, rejecting other shapes and NaN/inf.
 
-    A scalar is not accepted: signals are sequences of samples.
+    A row or column vector (shape (1, N) or (N, 1)) is accepted as the N
+    samples it holds; other 2-D shapes, scalars, complex or boolean
+    arrays are refused.
     """
-    if _is_str(values):
-        raise TypeError(f"{name} must be an array of numbers; got a string")
-    try:
-        arr = np.asarray(values, dtype=float)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name} must be an array of numbers; got "
-                        f"{type(values).__name__}") from None
+    arr = _real_array(name, values, 'an array of numbers')
     if arr.ndim == 2 and 1 in arr.shape:
         arr = arr.ravel()          # a row or column vector is fine
     if arr.ndim != 1:
@@ -80,16 +305,48 @@ def check_signal(name, values, length=None):
     return np.ascontiguousarray(arr)
 
 
-def check_vector(name, values, length):
-    """Return a finite 1-D float array of exactly `length` entries."""
-    arr = np.asarray(values, dtype=float)
-    if arr.ndim != 1 or arr.size != length:
+def check_vector(name, values, length=None):
+    """Return a finite 1-D float array (of exactly `length` entries)."""
+    arr = _real_array(name, values, 'a sequence of numbers')
+    if arr.ndim != 1 or (length is not None and arr.size != length):
+        want = f" of length {length}" if length is not None else ""
         raise ValueError(
-            f"{name} must be a 1-D array of length {length}; "
-            f"got shape {arr.shape}")
+            f"{name} must be a 1-D array{want}; got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} must be finite; got {arr}")
     return arr.copy()
+
+
+def check_timepts(name, timepts, length, dt):
+    """Evenly spaced time points, `length` of them, with spacing `dt`.
+
+    A simulation of a discrete system advances one sample per step, so
+    time points must be ``t0 + dt * arange(N)``; anything else is refused
+    rather than silently reinterpreted.
+    """
+    t = check_signal(name, timepts, length=length)
+    if t.size < 2:
+        return t
+    step = np.diff(t)
+    if np.any(step <= 0):
+        k = int(np.flatnonzero(step <= 0)[0])
+        raise ValueError(f"{name} must increase; t[{k + 1}] = {t[k + 1]} "
+                         f"<= t[{k}] = {t[k]}")
+    h = (t[-1] - t[0]) / (t.size - 1)
+    # rounding of t0 + k h grows with the size of t
+    tol = max(1e-6 * h, 8 * np.finfo(float).eps * np.max(np.abs(t)))
+    if np.max(np.abs(step - h)) > tol:
+        k = int(np.argmax(np.abs(step - h)))
+        raise ValueError(
+            f"{name} must be evenly spaced (one per sample); the step "
+            f"t[{k + 1}] - t[{k}] = {step[k]:.6g} differs from the mean "
+            f"step {h:.6g}")
+    if dt is not True and abs(h - float(dt)) > max(1e-6 * float(dt), tol):
+        raise ValueError(
+            f"{name} has spacing {h:.6g} but the system samples every "
+            f"dt = {dt!r}; pass t0 + dt * np.arange(N) (or resample the "
+            f"data)")
+    return t
 
 
 def check_discrete_siso_tf(name, sys):
@@ -113,18 +370,29 @@ def check_discrete_siso_tf(name, sys):
             f"{name} must be discrete-time (dt > 0 or dt=True); got "
             f"dt={sys.dt!r}. Discretise it first, e.g. with "
             f"ct.sample_system({name}, Ts)")
-    num = np.trim_zeros(np.atleast_1d(np.asarray(sys.num[0][0], float)), 'f')
-    den = np.trim_zeros(np.atleast_1d(np.asarray(sys.den[0][0], float)), 'f')
+    if sys.dt is not True and not np.isfinite(sys.dt):
+        raise ValueError(f"{name} must have a finite sampling time; got "
+                         f"dt={sys.dt!r}")
+    raw_num = np.atleast_1d(np.asarray(sys.num[0][0]))
+    raw_den = np.atleast_1d(np.asarray(sys.den[0][0]))
+    if np.iscomplexobj(raw_num) or np.iscomplexobj(raw_den):
+        raise ValueError(f"{name} has complex coefficients; a sandwich "
+                         f"block must be real")
+    num = np.trim_zeros(raw_num.astype(float), 'f')
+    den = np.trim_zeros(raw_den.astype(float), 'f')
+    if not (np.all(np.isfinite(num)) and np.all(np.isfinite(den))):
+        raise ValueError(f"{name} has non-finite coefficients (NaN or inf)")
     if num.size == 0:
         raise ValueError(f"{name} has a zero numerator; a sandwich block "
                          f"must pass its input on")
+    if den.size - 1 > MAX_ORDER:
+        raise ValueError(f"{name} has order {den.size - 1}; sandwichctl "
+                         f"accepts at most {MAX_ORDER}")
     if num.size > den.size:
         raise ValueError(
             f"{name} is improper (numerator degree {num.size - 1} > "
             f"denominator degree {den.size - 1}); a causal difference "
             f"equation needs deg(num) <= deg(den)")
-    if not (np.all(np.isfinite(num)) and np.all(np.isfinite(den))):
-        raise ValueError(f"{name} has non-finite coefficients")
     return num / den[0], den / den[0]
 
 
@@ -140,10 +408,15 @@ def common_dt(name1, dt1, name2, dt2):
 
 
 def _as_real_scalar(name, value):
-    if isinstance(value, bool) or not isinstance(
+    if isinstance(value, (bool, np.bool_)) or not isinstance(
             value, (numbers.Real, np.floating, np.integer)):
-        arr = np.asarray(value) if not _is_str(value) else None
-        if arr is None or arr.ndim != 0 or not np.isrealobj(arr):
+        arr = None
+        if not _is_str(value) and value is not None:
+            try:
+                arr = np.asarray(value)
+            except Exception:
+                arr = None
+        if (arr is None or arr.ndim != 0 or arr.dtype.kind not in 'iuf'):
             raise TypeError(f"{name} must be a real number; got "
                             f"{type(value).__name__} {value!r}")
         value = arr.item()
@@ -152,12 +425,3 @@ def _as_real_scalar(name, value):
 
 def _is_str(value):
     return isinstance(value, (str, bytes))
-
-
-def check_dt(name, dt):
-    """A discrete sampling time: a positive number or True (unspecified)."""
-    if dt is None or dt is False or (dt is not True and not dt > 0):
-        raise ValueError(f"{name} must be a positive sampling time or True "
-                         f"(discrete, unspecified); got {dt!r}. The backlash "
-                         f"and its inverse are discrete-time maps")
-    return dt

@@ -445,3 +445,55 @@ def test_demo_plot_returns_three_axes():
     axs = demo.plot()
     assert len(axs) == 3
     assert 'RMS ratio' in axs[0].get_title()
+
+
+# ----------------------------------------------------------------------
+# The compensator simulates like the plant does
+# ----------------------------------------------------------------------
+@pytest.mark.parametrize('smoothing, band_fraction', [(0.0, 1.0),
+                                                      (0.1, 0.9)])
+def test_compensator_simulate_agrees_with_python_control(smoothing,
+                                                         band_fraction, rng):
+    plant = sw.examples.paper_plant()
+    comp = sw.sandwich_compensator(plant, smoothing=smoothing,
+                                   band_fraction=band_fraction)
+    # stay clear of the slope-line crossing at x = -6.1, where no inverse
+    # is exact
+    r = np.clip(np.cumsum(0.3 * rng.standard_normal(200)), -3, 3)
+    x0 = np.array([0.4, 0.1, 0.2, -0.1])
+    fast = comp.simulate(r, initial_state=x0, internal=True)
+    slow = ct.input_output_response(comp, np.arange(200), r,
+                                    initial_state=x0)
+    np.testing.assert_allclose(fast.outputs[0], slow.outputs, rtol=0,
+                               atol=1e-12)
+    assert fast.output_labels == ['u', 'x_d', 'v_hat']
+    # x_d drives the plant's backlash to v_d one delay later
+    v = plant.simulate(comp.simulate(r).outputs, internal=True).outputs[2]
+    if smoothing == 0 and band_fraction == 1:
+        np.testing.assert_allclose(v[1:], r[:-1], atol=1e-12)
+
+
+def test_compensator_simulate_continues_from_final_state(rng):
+    comp = sw.sandwich_compensator(sw.examples.paper_plant(), smoothing=0.05)
+    r = rng.standard_normal(100)
+    whole = comp.simulate(r).outputs
+    first = comp.simulate(r[:40])
+    second = comp.simulate(r[40:], initial_state=first.final_state)
+    np.testing.assert_array_equal(np.concatenate([first.outputs,
+                                                  second.outputs]), whole)
+
+
+def test_compensator_simulate_labels_and_time():
+    plant = sw.SandwichSystem(ct.tf([1.5, 0], [1, 0.1, 0.2], 0.1),
+                              sw.Backlash(1, 1.2, 0.5, 0.6),
+                              ct.tf([2, -0.1], [1, 1.2, 0.32], 0.1))
+    comp = sw.sandwich_compensator(plant, name='comp', inputs='r',
+                                   outputs='u_cmd')
+    resp = comp.simulate(np.ones(5), timepts=1 + 0.1 * np.arange(5))
+    assert resp.output_labels == ['u_cmd'] and resp.input_labels == ['r']
+    np.testing.assert_allclose(resp.time, 1 + 0.1 * np.arange(5))
+    with pytest.raises(ValueError, match='timepts has spacing 1'):
+        comp.simulate(np.ones(5), timepts=np.arange(5))
+    step = sw.step_response(comp, amplitude=0.5)
+    np.testing.assert_array_equal(
+        step.outputs, comp.simulate(np.full(step.time.size, 0.5)).outputs)

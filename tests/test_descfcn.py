@@ -188,7 +188,7 @@ def test_first_harmonic_of_a_sampled_sine():
     (lambda: sw.BacklashNonlinearity(1, -2, 0.5, 0.5), ValueError,
      'm2 must be a finite number > 0'),
     (lambda: sw.BacklashNonlinearity(1, 1, 0.5, 0.5).describing_function(-1),
-     ValueError, 'A must be >= 0'),
+     ValueError, 'A must be a finite number >= 0'),
     (lambda: sw.BacklashNonlinearity(1, 1, 0.5, 0.5)(0.3), TypeError,
      'memory'),
     (lambda: sw.backlash_nonlinearity(sw.examples.paper_plant()), TypeError,

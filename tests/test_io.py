@@ -148,9 +148,9 @@ def test_not_a_model_file(tmp_path):
     ('m1', -1.0, r"m1 must be a finite number > 0"),
     ('a', 0.1, r"'a' must be a list of numbers"),
     ('dt', 'fast', r"'dt' must be a positive number or true"),
-    ('dt', -1, r"dt must be a positive sampling time"),
-    ('q1', 1.5, r"q1 must be an integer"),
-    ('metadata', [1], r"metadata must be a JSON object"),
+    ('dt', -1, r"'dt' must be a positive number or true"),
+    ('q1', 1.5, r"'q1' must be an integer"),
+    ('metadata', [1], r"'metadata' must be a JSON object"),
 ])
 def test_invalid_contents(key, value, message):
     data = _valid()

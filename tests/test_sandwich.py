@@ -314,3 +314,64 @@ def test_feedback_and_interconnect_work_like_any_system():
 def test_bad_input(make, exc, match):
     with pytest.raises(exc, match=match):
         make()
+
+
+# ----------------------------------------------------------------------
+# Step responses, time points, declared orders
+# ----------------------------------------------------------------------
+def test_step_response_depends_on_the_amplitude():
+    plant = sw.examples.paper_plant()
+    small = sw.step_response(plant, amplitude=0.2)
+    assert np.all(small.outputs == 0)             # inside the dead band
+    big = sw.step_response(plant, amplitude=2.0)
+    np.testing.assert_array_equal(
+        big.outputs, plant.simulate(np.full(big.time.size, 2.0)).outputs)
+    assert 'amplitude 2' in big.title
+    # python-control's own step_response needs time points, and agrees
+    unit = sw.step_response(plant, timepts=np.arange(30))
+    np.testing.assert_allclose(
+        ct.step_response(plant, np.arange(30)).outputs, unit.outputs,
+        atol=1e-12)
+
+
+def test_step_response_time_points():
+    plant = sw.SandwichSystem(ct.tf([1], [1, -0.5], 0.1),
+                              sw.Backlash(1, 1, 0.1, 0.1),
+                              ct.tf([1], [1, -0.9], 0.1))
+    resp = sw.step_response(plant)
+    # slowest pole 0.9: 7 time constants of -1/ln(0.9) samples, + delays
+    assert resp.time.size == int(np.ceil(7 / -np.log(0.9))) + 2
+    np.testing.assert_allclose(resp.time, 0.1 * np.arange(resp.time.size))
+    assert sw.step_response(plant, timepts=2.0).time.size == 21
+    integrating = sw.SandwichSystem(ct.tf([1], [1, -1], 1),
+                                    sw.Backlash(1, 1, 0.1, 0.1),
+                                    ct.tf([1], [1, 0], 1))
+    assert sw.step_response(integrating).time.size == 102
+    lin = sw.step_response(ct.tf([1], [1, -0.5], 1), amplitude=3)
+    np.testing.assert_allclose(lin.outputs[-1], 6, rtol=1e-3)
+
+
+def test_simulate_accepts_evenly_spaced_timepts_only():
+    plant = sw.SandwichSystem(ct.tf([1], [1, -0.5], 0.1),
+                              sw.Backlash(1, 1, 0.1, 0.1),
+                              ct.tf([1], [1, -0.9], 0.1))
+    t = 5 + 0.1 * np.arange(30)
+    np.testing.assert_array_equal(plant.simulate(np.ones(30),
+                                                 timepts=t).time, t)
+    with pytest.raises(ValueError, match='timepts must be evenly spaced'):
+        plant.simulate(np.ones(30), timepts=t + 0.01 * (np.arange(30) > 9))
+    with pytest.raises(ValueError, match='timepts has spacing 1'):
+        plant.simulate(np.ones(30), timepts=np.arange(30))
+
+
+def test_from_coefficients_keeps_orders_without_extra_states():
+    plant = sw.SandwichSystem.from_coefficients(
+        a=[0.1, 0.2, 0.0], b=[1.5, 0.0], c=[1.2, 0.32], d=[2, -0.1, 0.0],
+        m1=1, m2=1.2, D1=0.5, D2=0.6, dt=1)
+    assert plant.orders == {'na': 3, 'nb': 1, 'nc': 2, 'nd': 2, 'q1': 1,
+                            'q2': 1}
+    ref = sw.examples.paper_plant()
+    assert plant.nstates == ref.nstates
+    u = sw.examples.paper_input(200, seed=2)
+    np.testing.assert_array_equal(plant.simulate(u).outputs,
+                                  ref.simulate(u).outputs)

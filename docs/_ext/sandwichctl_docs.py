@@ -23,8 +23,18 @@
 3. **Notebooks.** `copy_notebooks` copies the notebooks of the folder
    named by ``sandwichctl_notebooks`` (``../notebooks``) to
    ``docs/notebooks/`` (git-ignored), where the toctree can list them as
-   ``notebooks/<name>``. They are rendered by myst-nb without being
-   executed.
+   ``notebooks/<name>``. myst-nb executes them at build time (conf.py).
+
+4. **Soft references.** The default role ``sandwichctl-obj`` (text in
+   single backquotes) is ``:py:obj:`` with two additions, resolved when
+   Python's own lookup fails (``missing-reference``): a name documented
+   under another path is found by its tail (``identify`` on the page of
+   ``sandwichctl.identification.pipeline`` links to ``sandwichctl.identify``,
+   ``examples.add_noise`` to ``sandwichctl.paper.examples.add_noise``);
+   and a plain word that names no documented object (numpydoc writes
+   parameter names in single backquotes) renders as code without a
+   warning. A dotted name that resolves nowhere still fails the nitpicky
+   build, so a typo such as ``SandwichSystem.simulte`` is caught.
 """
 
 import importlib
@@ -35,8 +45,10 @@ import textwrap
 from pathlib import Path
 
 from docutils.parsers.rst import directives
+from sphinx.domains.python import PyXRefRole
 from sphinx.util import logging
 from sphinx.util.docutils import SphinxDirective
+from sphinx.util.nodes import make_refnode
 
 logger = logging.getLogger(__name__)
 
@@ -128,6 +140,18 @@ def _index_page(package, modules):
                   '   :maxdepth: 1', '']
         lines += [f"   {name}" for name in names]
         lines.append('')
+    warning_names = _warning_names(package)
+    if warning_names:
+        title = 'Warnings: categories to filter'
+        lines += [title, '-' * len(title), '',
+                  "Every warning sandwichctl issues belongs to one of these "
+                  "categories and points at the user's line, so it can be "
+                  "filtered, e.g. ``warnings.simplefilter('ignore', "
+                  "sw.IdentificationWarning)``.", '',
+                  f".. currentmodule:: {package.__name__}", '',
+                  '.. autosummary::', '   :toctree: generated', '']
+        lines += [f"   {name}" for name in warning_names]
+        lines.append('')
     lines += ['', 'All public names', '----------------', '',
               f".. currentmodule:: {package.__name__}", '',
               '.. autosummary::', '']
@@ -135,6 +159,13 @@ def _index_page(package, modules):
         lines += [f"   {_relative_name(package, module, n)}"
                   for n in getattr(module, '__all__', [])]
     return '\n'.join(lines) + '\n'
+
+
+def _warning_names(package):
+    """Public warning categories exported at the top of the package."""
+    return [name for name in getattr(package, '__all__', [])
+            if isinstance(getattr(package, name, None), type)
+            and issubclass(getattr(package, name), Warning)]
 
 
 def _write_if_changed(path, text):
@@ -164,6 +195,7 @@ def write_api_pages(srcdir, package_name='sandwichctl'):
             stale.unlink()
     stubs = {f"{package_name}.{_relative_name(package, module, n)}.rst"
              for _, module in modules for n in getattr(module, '__all__', [])}
+    stubs |= {f"{package_name}.{n}.rst" for n in _warning_names(package)}
     for stale in (outdir / 'generated').glob('*.rst'):
         if stale.name not in stubs:
             stale.unlink()
@@ -243,6 +275,38 @@ class DocstringDirective(SphinxDirective):
         return self.parse_text_to_nodes(doc, allow_section_headings=True)
 
 
+class SoftObjRole(PyXRefRole):
+    """``:py:obj:`` that may fall back softly (see the module notes)."""
+
+    def result_nodes(self, document, env, node, is_ref):
+        node['refdomain'], node['reftype'] = 'py', 'obj'
+        node['sandwichctl_soft'] = True
+        return [node], []
+
+
+def _on_missing_reference(app, env, node, contnode):
+    """Resolve a soft reference by its tail, or render a plain word."""
+    if not node.get('sandwichctl_soft'):
+        return None
+    target = node['reftarget']
+    package = app.config.sandwichctl_package
+    objects = env.get_domain('py').objects
+    tail = target[len(package) + 1:] if target.startswith(
+        package + '.') else target
+    candidates = [f"{package}.{tail}"] + sorted(
+        name for name in objects
+        if '.' in tail and name.endswith('.' + tail)
+        and name.startswith(package + '.'))
+    for name in candidates:
+        if name in objects:
+            entry = objects[name]
+            return make_refnode(app.builder, node['refdoc'], entry.docname,
+                                entry.node_id, contnode, name)
+    if '.' not in target:
+        return contnode        # a parameter name or a plain word
+    return None
+
+
 def _on_config_inited(app, config):
     write_api_pages(app.srcdir, config.sandwichctl_package)
     if config.sandwichctl_notebooks:
@@ -255,5 +319,7 @@ def setup(app):
     app.add_config_value('sandwichctl_package', 'sandwichctl', 'env')
     app.add_config_value('sandwichctl_notebooks', None, 'env')
     app.add_directive('sandwichctl-docstring', DocstringDirective)
+    app.add_role('sandwichctl-obj', SoftObjRole())
     app.connect('config-inited', _on_config_inited)
+    app.connect('missing-reference', _on_missing_reference)
     return {'parallel_read_safe': True, 'parallel_write_safe': True}

@@ -33,8 +33,10 @@ from .compensator import (SandwichCompensator, sandwich_compensator,
                           linearized_plant, _tf_text, _check_model)
 from ..model._kernel import _ss_output, _ss_update
 from ..model.backlash import backlash_step
-from ..model.sandwich import SandwichSystem
-from .._checks import check_discrete_siso_tf, check_signal, common_dt
+from ..model.sandwich import SandwichSystem, _warn_divergence
+from .._checks import (check_discrete_siso_tf, check_signal, common_dt,
+                       check_bool, check_finite, check_int, check_name,
+                       check_vector)
 
 __all__ = ['TrackingController', 'tracking_controller', 'closed_loop_system',
            'closed_loop_response', 'steps_and_sines', 'CompensationDemo',
@@ -123,6 +125,9 @@ class TrackingController:
         (0, True)
         """
         num, den = check_discrete_siso_tf('C', C)
+        if design_plant is not None:
+            check_discrete_siso_tf('design_plant', design_plant)
+            common_dt('C', C.dt, 'design_plant', design_plant.dt)
         C = ct.tf(num, den, C.dt, inputs='e', outputs='v_fb', name='feedback')
         return cls(C, None, 0, design_plant, None, None)
 
@@ -186,6 +191,9 @@ def tracking_controller(sys, feedforward=True, modulus_margin=0.6,
     (2, True, True)
     """
     num, den = check_discrete_siso_tf('sys', sys)
+    feedforward = check_bool('feedforward', feedforward)
+    approximate = check_bool('approximate', approximate)
+    modulus_margin = check_finite('modulus_margin', modulus_margin)
     if not 0 < modulus_margin < 1:
         raise ValueError(f"modulus_margin must be in (0, 1); got "
                          f"{modulus_margin!r}")
@@ -327,7 +335,7 @@ def closed_loop_response(plant, reference, controller, compensator=None):
 
     The loop is ``u = comp[C(z)(r - y) + F(z) r_ahead]`` (without `comp`:
     ``u = C(z)(r - y) + F(z) r_ahead``), where r_ahead(k) = r(k + d) is the
-    reference `controller.preview` samples ahead, held at its last value
+    reference ``controller.preview`` samples ahead, held at its last value
     past the end. All systems start at rest. The result equals
     ``ct.input_output_response`` of `closed_loop_system` (tested to 1e-10)
     and is computed by a compiled kernel that calls `backlash_step` for the
@@ -354,6 +362,11 @@ def closed_loop_response(plant, reference, controller, compensator=None):
     ------
     ValueError
         If the sampling times disagree or the plant has no delay.
+
+    Warns
+    -----
+    SimulationWarning
+        If the loop is unstable and its output overflows.
     """
     dt = _check_loop(plant, controller, compensator)
     r = check_signal('reference', reference)
@@ -379,6 +392,8 @@ def closed_loop_response(plant, reference, controller, compensator=None):
                         A1, B1, C1, D1, A2, B2, C2, D2, bl.m1, bl.m2,
                         bl.D1, bl.D2, y, u, x, v)
     step = 1.0 if dt is True else float(dt)
+    _warn_divergence(f"the closed loop of {plant.name}", y, u[-1:],
+                     step * np.arange(n))
     return ct.TimeResponseData(
         step * np.arange(n), np.vstack([y, u, x, v]), None, r,
         issiso=False, output_labels=['y', 'u', 'x', 'v'],
@@ -412,6 +427,7 @@ def closed_loop_system(plant, controller, compensator=None, name=None):
     control.InterconnectedSystem
     """
     dt = _check_loop(plant, controller, compensator)
+    name = check_name('name', name)
     d = controller.preview
     blocks = [SandwichSystem(plant.L1, plant.backlash, plant.L2,
                              name='plant', inputs='u', outputs='y'),
@@ -469,9 +485,12 @@ def steps_and_sines(n=1200, levels=(0.0, 1.0, -0.5, 1.5, 0.3),
     [ 0.  0.  0.  0.  0.  1.  1.  1.  1.  1.  0.  1.  0. -1. -0.  1.  0. -1.
      -0.  1.]
     """
-    n = int(n)
-    if n < 2:
-        raise ValueError(f"n must be >= 2; got {n}")
+    n = check_int('n', n, minimum=2)
+    levels = check_vector('levels', levels)
+    amplitudes = check_vector('amplitudes', amplitudes)
+    periods = check_vector('periods', periods, amplitudes.size)
+    if np.any(periods <= 0):
+        raise ValueError(f"periods must be > 0 (in samples); got {periods}")
     half = n // 2
     r = np.empty(n)
     edges = np.linspace(0, half, len(levels) + 1).round().astype(int)

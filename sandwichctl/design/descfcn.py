@@ -59,7 +59,8 @@ from ..model.backlash import Backlash
 from ..model.sandwich import SandwichSystem
 from .closedloop import TrackingController, closed_loop_response
 from .._checks import (check_finite, check_nonnegative, check_positive,
-                          check_signal)
+                       check_signal, check_int, check_bool, check_name,
+                       check_discrete_siso_tf)
 
 __all__ = ['BacklashNonlinearity', 'backlash_nonlinearity',
            'backlash_harmonics', 'unit_circle_frd', 'limit_cycles',
@@ -237,8 +238,7 @@ class BacklashNonlinearity(ct.DescribingFunctionNonlinearity):
         ValueError
             If A < 0.
         """
-        if A < 0:
-            raise ValueError(f"A must be >= 0 (an amplitude); got {A!r}")
+        A = check_nonnegative('A', A)
         c = self.bias(A)
         if c is None:
             return 0j
@@ -330,6 +330,7 @@ def unit_circle_frd(sys, omega=None, name=None):
     if sys.ninputs != 1 or sys.noutputs != 1:
         raise ValueError(f"sys must be SISO; got {sys.noutputs} outputs and "
                          f"{sys.ninputs} inputs")
+    name = check_name('name', name)
     dt = 1.0 if sys.dt is True else float(sys.dt)
     if omega is None:
         omega = np.linspace(1e-3, 1.0, 2000) * np.pi / dt
@@ -371,7 +372,18 @@ def limit_cycles(H, F, A, omega=None, refine=True):
         predicted limit cycles. ``.plot()`` draws the Nyquist curve and
         :math:`-1/N(A)` (``ct.describing_function_plot``).
     """
+    if not isinstance(H, ct.LTI) or H.ninputs != 1 or H.noutputs != 1:
+        raise TypeError(f"H must be a SISO python-control LTI system (e.g. "
+                        f"a ct.TransferFunction); got {type(H).__name__}")
+    if not (isinstance(F, ct.DescribingFunctionNonlinearity)
+            or callable(F)):
+        raise TypeError(f"F must be a describing-function nonlinearity "
+                        f"(e.g. sw.backlash_nonlinearity(...)) or a "
+                        f"function; got {type(F).__name__}")
     A = check_signal('A', A)
+    if np.any(A <= 0):
+        raise ValueError(f"A must hold amplitudes > 0; got {A.min():g}")
+    refine = check_bool('refine', refine)
     if H.isdtime(strict=True):
         H = unit_circle_frd(H, omega)
         omega = H.omega
@@ -485,6 +497,7 @@ def sandwich_limit_cycles(model, C, A=None, omega=None, output_mean=0.0,
     if not isinstance(model, SandwichSystem):
         raise TypeError(f"model must be a sandwichctl.SandwichSystem; got "
                         f"{type(model).__name__}")
+    check_discrete_siso_tf('C', C)
     F = backlash_nonlinearity(model.backlash, output_mean=output_mean)
     if A is None:
         v = F.output_mean
@@ -526,8 +539,12 @@ def simulate_limit_cycle(plant, C, n=8000, kick=1.0, settle=None):
     response : control.TimeResponseData
         The simulation (`closed_loop_response`).
     """
-    n = int(n)
-    settle = n // 2 if settle is None else int(settle)
+    n = check_int('n', n, minimum=8)
+    kick = check_finite('kick', kick)
+    settle = n // 2 if settle is None else check_int('settle', settle)
+    if settle > n - 4:
+        raise ValueError(f"settle must leave samples to measure: at most "
+                         f"n - 4 = {n - 4}; got {settle}")
     r = np.zeros(n)
     r[:20] = kick
     resp = closed_loop_response(plant, r, TrackingController.from_feedback(C))

@@ -77,7 +77,9 @@ import control as ct
 from ..model.backlash import Backlash, backlash_step
 from ..model.sandwich import SandwichSystem
 from .._checks import (check_discrete_siso_tf, check_nonnegative,
-                       check_positive, check_signal, common_dt, check_dt)
+                       check_positive, check_signal, common_dt, check_dt,
+                       check_finite, check_bool, check_name, check_label,
+                       check_labels)
 
 __all__ = ['BacklashInverse', 'backlash_inverse', 'backlash_inverse_response',
            'causal_inverse']
@@ -186,9 +188,11 @@ def backlash_inverse_response(v_d, m1, m2, D1, D2, x_prev=0.0, v_prev=0.0,
     D2 = check_nonnegative('D2', D2)
     width = check_nonnegative('smoothing', smoothing)
     v_d = check_signal('v_d', v_d)
+    x_prev = check_finite('x_prev', x_prev)
+    v_prev = check_finite('v_prev', v_prev)
+    return_expected = check_bool('return_expected', return_expected)
     x, v_hat = np.empty_like(v_d), np.empty_like(v_d)
-    _inverse_loop(v_d, m1, m2, D1, D2, width, float(x_prev), float(v_prev),
-                  x, v_hat)
+    _inverse_loop(v_d, m1, m2, D1, D2, width, x_prev, v_prev, x, v_hat)
     return (x, v_hat) if return_expected else x
 
 
@@ -266,10 +270,22 @@ class BacklashInverse(ct.NonlinearIOSystem):
                   'D1_hat': check_nonnegative('D1', D1),
                   'D2_hat': check_nonnegative('D2', D2),
                   'smoothing': check_nonnegative('smoothing', smoothing)}
-        check_dt('dt', dt)
+        dt = check_dt('dt', dt)
+        name = check_name('name', name)
+        inputs = check_label('inputs', inputs, 'input')
+        outputs = check_label('outputs', outputs, 'output')
+        states = check_labels('states', states, 2)
         super().__init__(
             _inverse_update, _inverse_output, inputs=inputs, outputs=outputs,
-            states=list(states), dt=dt, name=name, params=params)
+            states=states, dt=dt, name=name, params=params)
+
+    def __reduce__(self):
+        # rebuild from plain data, as Backlash does (robust to changes in
+        # python-control's internals)
+        return (type(self), (self.m1, self.m2, self.D1, self.D2,
+                             self.smoothing, self.dt, self.name,
+                             self.input_labels[0], self.output_labels[0],
+                             list(self.state_labels)))
 
     m1 = property(lambda self: self.params['m1_hat'], doc="Increase slope.")
     m2 = property(lambda self: self.params['m2_hat'], doc="Decrease slope.")
@@ -397,7 +413,8 @@ def causal_inverse(sys, approximate=False, name=None):
       z
     <BLANKLINE>
     """
-    return _causal_inverse(sys, approximate, name)[0]
+    approximate = check_bool('approximate', approximate)
+    return _causal_inverse(sys, approximate, check_name('name', name))[0]
 
 
 def _causal_inverse(sys, approximate, name=None):

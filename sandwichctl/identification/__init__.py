@@ -9,6 +9,11 @@
 - `batch`: `refine`, the batch output-error refinement of a model on a
   whole record.
 - `pipeline`: `identify`, which chains them.
+- `fleet`: `identify_many`, `identify` over many data sets in parallel
+  (local processes or a dask cluster).
+- `structure`: `select_structure`, which identifies a small grid of
+  orders and delays (and the linear models they nest) and ranks them in
+  a `StructureTable`.
 
 The private modules hold the parts: `_predictor` (the model output and
 its sensitivities, the stability predicate), `_recursive` (the compiled
@@ -17,12 +22,15 @@ Levenberg-Marquardt solver), `_nested` (sandwich starts nested in a
 linear fit) and `_qp` (the piqp wrapper).
 """
 
-from . import result, recursive, linear, batch, pipeline
+from . import result, recursive, linear, batch, pipeline, structure, fleet
 from .result import *
 from .recursive import *
 from .linear import *
 from .batch import *
 from .pipeline import *
+from .fleet import *
+from .structure import *
 
 __all__ = (result.__all__ + recursive.__all__ + linear.__all__
-           + batch.__all__ + pipeline.__all__)
+           + batch.__all__ + pipeline.__all__ + structure.__all__
+           + fleet.__all__)

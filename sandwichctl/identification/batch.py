@@ -43,16 +43,15 @@ guards against the local minima that a nonconvex output-error cost has.
 """
 
 import time
-import warnings
 
 import numpy as np
-from tqdm.auto import tqdm
 
 from ._oe import Structure, lm
 from .result import IdentificationResult, backlash_significance, whiteness
 from ..model.sandwich import SandwichSystem
 from ._data import prepare, scale as _scale
-from .._checks import check_int, check_positive
+from .._checks import (check_int, check_positive, warn,
+                       IdentificationWarning)
 
 __all__ = ['refine']
 
@@ -314,9 +313,8 @@ def _warn_poorly_determined(res):
         names = [n for n, bad in zip(res.theta_labels, ill) if bad]
         res.message += (f"; parameters poorly determined by these data "
                         f"(standard error > 50%): {names}")
-        warnings.warn(f"{names} are poorly determined by the data "
-                      f"(excitation too small or orders too high?)",
-                      RuntimeWarning, stacklevel=3)
+        warn(f"{names} are poorly determined by the data (excitation too "
+             f"small or orders too high?)", IdentificationWarning)
 
 
 def _progress_range(n, progress, desc, step=1):
@@ -325,4 +323,5 @@ def _progress_range(n, progress, desc, step=1):
     steps = range(0, n, step)
     if not progress:
         return steps
-    return tqdm(steps, desc=desc, leave=False)
+    from tqdm.auto import tqdm       # only when asked: in a notebook it
+    return tqdm(steps, desc=desc, leave=False)  # needs ipywidgets

@@ -29,7 +29,6 @@ import warnings
 
 import numpy as np
 from scipy.signal import lfilter
-from tqdm.auto import tqdm
 
 from ._data import prepare
 from ._nested import splits
@@ -39,7 +38,9 @@ from .batch import Problem, refine as _refine, _progress_range, \
     _warn_poorly_determined, _admissible_start, MIN_FIT
 from .linear import _fit_oe, oe_transfer_function
 from .recursive import RecursiveIdentifier, DEFAULTS
-from .._checks import check_int, check_positive
+from .._checks import (check_int, check_order, check_positive, warn,
+                       ExcitationWarning, SimulationWarning,
+                       SandwichWarning, IdentificationWarning)
 
 __all__ = ['identify']
 
@@ -162,16 +163,19 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     if name is not None and not isinstance(name, str):
         raise TypeError(f"name must be a string or None; got "
                         f"{type(name).__name__} {name!r}")
-    orders = {k: check_int(k, v) for k, v in
+    orders = {k: check_order(k, v) for k, v in
               zip(('na', 'nb', 'nc', 'nd', 'q1', 'q2'),
                   (na, nb, nc, nd, q1, q2))}
     p = orders['na'] + orders['nb'] + orders['nc'] + orders['nd'] + 4
     needed = 10 * p + padding(tuple(orders.values()))
     n_samples = sum(part.size for part in us)
     if n_samples < needed:
+        big = max(orders, key=orders.get)
         raise ValueError(
             f"the data have {n_samples} samples, too few for {p} parameters "
-            f"with these orders and delays; give at least {needed}")
+            f"with these orders and delays (the largest is {big} = "
+            f"{orders[big]}); give at least {needed} samples or lower the "
+            f"orders")
     if method == 'oe':
         if refine not in (None, True):
             raise ValueError(f"refine applies to the recursive methods; "
@@ -469,6 +473,7 @@ def _progress(progress, total):
     """A tqdm bar over the starts when asked for, else a do-nothing one."""
     if not progress:
         return _NoBar()
+    from tqdm.auto import tqdm       # only when asked (see batch)
     return tqdm(total=total, desc='identify: starts', leave=False)
 
 
@@ -506,7 +511,8 @@ def _identify_recursive(u, y, orders, method, theta0, dt, refine, progress,
             if est.diverged_at is not None:
                 break
     for w in caught:
-        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        warn(str(w.message), w.category if issubclass(
+            w.category, SandwichWarning) else IdentificationWarning)
     result = est.result(elapsed=time.perf_counter() - start)
     if not stable_and_finite(result.theta, est._o):
         result.success = False
@@ -530,7 +536,8 @@ def _identify_recursive(u, y, orders, method, theta0, dt, refine, progress,
 def _check_excitation(result, us):
     """Warn if the identified backlash barely leaves its memory zone."""
     model = result.model
-    with np.errstate(all='ignore'):
+    with np.errstate(all='ignore'), warnings.catch_warnings():
+        warnings.simplefilter('ignore', SimulationWarning)  # said already
         x = np.concatenate([model.simulate(u, internal=True).outputs[1]
                             for u in us])
     if not np.all(np.isfinite(x)):
@@ -540,9 +547,7 @@ def _check_excitation(result, us):
     moving = float(np.mean(zones != 0))
     result.excitation = moving
     if moving < 0.01:
-        warnings.warn(
-            f"the backlash of the identified model is outside its memory "
-            f"zone in only {moving:.1%} of the samples: the data hardly "
-            f"excite it, so m1, m2, D1, D2 are unreliable (is the input "
-            f"amplitude smaller than the dead band?)", RuntimeWarning,
-            stacklevel=3)
+        warn(f"the backlash of the identified model is outside its memory "
+             f"zone in only {moving:.1%} of the samples: the data hardly "
+             f"excite it, so m1, m2, D1, D2 are unreliable (is the input "
+             f"amplitude smaller than the dead band?)", ExcitationWarning)

@@ -26,7 +26,6 @@ The interpretations of the places where the paper is loose are listed in
 """
 
 
-import warnings
 
 import numpy as np
 
@@ -38,7 +37,8 @@ from ._recursive import (bundle_prepare, bundle_finish, gradient_run,
                          RPEM_RESET)
 from .result import IdentificationResult
 from ..model.sandwich import SandwichSystem, theta_labels
-from .._checks import (check_int, check_positive, check_nonnegative,
+from .._checks import (warn, IdentificationWarning, check_order,
+                       check_int, check_positive, check_nonnegative,
                        check_signal, check_vector, check_finite)
 
 __all__ = ['RecursiveIdentifier']
@@ -231,9 +231,9 @@ class RecursiveIdentifier:
 
     def __init__(self, na, nb, nc, nd, q1=1, q2=1, method='bundle',
                  theta0=None, dt=True, keep_history=True, **options):
-        self.orders = {'na': check_int('na', na), 'nb': check_int('nb', nb),
-                       'nc': check_int('nc', nc), 'nd': check_int('nd', nd),
-                       'q1': check_int('q1', q1), 'q2': check_int('q2', q2)}
+        self.orders = {k: check_order(k, v) for k, v in
+                       zip(('na', 'nb', 'nc', 'nd', 'q1', 'q2'),
+                           (na, nb, nc, nd, q1, q2))}
         self._o = tuple(self.orders[k] for k in
                         ('na', 'nb', 'nc', 'nd', 'q1', 'q2'))
         self.method = method
@@ -363,11 +363,9 @@ class RecursiveIdentifier:
 
     def _flag_divergence(self, k_abs):
         self.diverged_at = k_abs
-        warnings.warn(
-            f"{self.method} estimate diverged at sample {k_abs} (non-finite "
-            f"or |theta| > {self.options['divergence_limit']:g}); stopped "
-            f"and kept the last finite estimate", RuntimeWarning,
-            stacklevel=4)
+        warn(f"{self.method} estimate diverged at sample {k_abs} (non-finite "
+             f"or |theta| > {self.options['divergence_limit']:g}); stopped "
+             f"and kept the last finite estimate", IdentificationWarning)
 
     def _run(self, k0, k1, errors):
         """Process buffer positions k0..k1-1; return how many were done."""
@@ -436,10 +434,9 @@ class RecursiveIdentifier:
                 try:
                     lam = simplex_qp(Hn @ Hn.T, beta[:n].copy())
                 except QPError as exc:
-                    warnings.warn(f"bundle QP failed at sample "
-                                  f"{self.n_samples + k - k0} ({exc}); "
-                                  f"using the current subgradient only",
-                                  RuntimeWarning, stacklevel=4)
+                    warn(f"bundle QP failed at sample "
+                         f"{self.n_samples + k - k0} ({exc}); using the "
+                         f"current subgradient only", IdentificationWarning)
                     lam = np.zeros(n)
                     lam[0] = 1.0
             kind, eta, phi = bundle_finish(

@@ -39,7 +39,9 @@ import numba
 import numpy as np
 import control as ct
 
-from .._checks import check_positive, check_nonnegative, check_signal
+from .._checks import (check_positive, check_nonnegative, check_signal,
+                       check_finite, check_bool, check_dt, check_name,
+                       check_label, check_labels)
 
 __all__ = ['Backlash', 'backlash_response', 'INCREASE', 'MEMORY', 'DECREASE']
 
@@ -106,9 +108,12 @@ def backlash_response(x, m1, m2, D1, D2, x_prev=0.0, v_prev=0.0,
     D1 = check_nonnegative('D1', D1)
     D2 = check_nonnegative('D2', D2)
     x = check_signal('x', x)
+    x_prev = check_finite('x_prev', x_prev)
+    v_prev = check_finite('v_prev', v_prev)
+    return_zones = check_bool('return_zones', return_zones)
     v = np.empty_like(x)
     zones = np.empty(x.size, dtype=np.int8)
-    _backlash_loop(x, m1, m2, D1, D2, float(x_prev), float(v_prev), v, zones)
+    _backlash_loop(x, m1, m2, D1, D2, x_prev, v_prev, v, zones)
     return (v, zones) if return_zones else v
 
 
@@ -150,6 +155,16 @@ class Backlash(ct.NonlinearIOSystem):
     states : list of str, optional
         State names; default ['x_prev', 'v_prev'].
 
+    Raises
+    ------
+    TypeError
+        If a parameter is not a real number (a boolean, a string, None),
+        `name` is not a string, or a signal name is not a string.
+    ValueError
+        If a parameter is out of range or not finite, `dt` is not a
+        finite positive number or True, or two input names are given for
+        the one input.
+
     See Also
     --------
     backlash_response : the same map over a whole sequence.
@@ -174,14 +189,21 @@ class Backlash(ct.NonlinearIOSystem):
         self._values = (check_positive('m1', m1), check_positive('m2', m2),
                         check_nonnegative('D1', D1),
                         check_nonnegative('D2', D2))
-        if dt is None or dt is False or (dt is not True and not dt > 0):
-            raise ValueError(
-                f"dt must be a positive sampling time or True (discrete, "
-                f"unspecified); got {dt!r}. The backlash of eq. (2.2) is a "
-                f"discrete-time map")
+        dt = check_dt('dt', dt)
+        name = check_name('name', name)
+        inputs = check_label('inputs', inputs, 'input')
+        outputs = check_label('outputs', outputs, 'output')
+        states = check_labels('states', states, 2)
         update, output = _backlash_functions(*self._values)
         super().__init__(update, output, inputs=inputs, outputs=outputs,
-                         states=list(states), dt=dt, name=name)
+                         states=states, dt=dt, name=name)
+
+    def __reduce__(self):
+        # The update and output functions are closures, which pickle
+        # cannot store: rebuild from the parameters and the names instead.
+        return (type(self), (*self._values, self.dt, self.name,
+                             self.input_labels[0], self.output_labels[0],
+                             list(self.state_labels)))
 
     # Read-only parameters. They are not python-control ``params``: an
     # interconnection merges the params of all its blocks into one dict,
@@ -210,14 +232,20 @@ class Backlash(ct.NonlinearIOSystem):
                                  x_prev, v_prev, return_zones)
 
     def copy_with(self, **changes):
-        """Return a new Backlash with some of m1, m2, D1, D2 changed."""
+        """Return a new Backlash with some of m1, m2, D1, D2 changed.
+
+        The sampling time, the name and the signal names are kept.
+        """
         values = dict(zip(('m1', 'm2', 'D1', 'D2'), self._values))
         unknown = set(changes) - set(values)
         if unknown:
             raise TypeError(f"unknown backlash parameter(s) {sorted(unknown)};"
                             f" expected some of m1, m2, D1, D2")
         values.update(changes)
-        return Backlash(dt=self.dt, **values)
+        return type(self)(dt=self.dt, name=self.name,
+                          inputs=self.input_labels[0],
+                          outputs=self.output_labels[0],
+                          states=list(self.state_labels), **values)
 
     def __repr__(self):
         return (f"Backlash(m1={self.m1:.6g}, m2={self.m2:.6g}, "

@@ -23,15 +23,19 @@ paper's :math:`x(k) = -0.1x(k-1) - 0.2x(k-2) + 1.5u(k-1)` is
 way with :math:`(c, d, q_2)` in place of :math:`(a, b, q_1)`.
 """
 
+import numbers
+
 import numpy as np
 import control as ct
 
 from .backlash import Backlash
 from ._kernel import simulate_kernel
-from .._checks import (check_discrete_siso_tf, check_int, check_signal,
-                          check_vector, common_dt)
+from .._checks import (check_discrete_siso_tf, check_order, check_signal,
+                       check_vector, common_dt, check_name, check_label,
+                       check_bool, check_dt, check_option, check_timepts,
+                       check_finite, warn, SimulationWarning, MAX_ORDER)
 
-__all__ = ['SandwichSystem', 'theta_labels']
+__all__ = ['SandwichSystem', 'theta_labels', 'step_response']
 
 
 class SandwichSystem(ct.InterconnectedSystem):
@@ -54,6 +58,12 @@ class SandwichSystem(ct.InterconnectedSystem):
         System name.
     inputs, outputs : str, optional
         Names of the input and output signals (default 'u' and 'y').
+    orders : dict, optional
+        Declared orders of eq. (2.1), a dict with some of na, nb, nc, nd
+        (and q1, q2, which must match the transfer functions): the
+        coefficient vectors are padded with zeros up to them, so that
+        `theta` has the length an identifier with these orders uses.
+        Default: the orders read from L1 and L2.
 
     Attributes
     ----------
@@ -68,6 +78,21 @@ class SandwichSystem(ct.InterconnectedSystem):
     --------
     SandwichSystem.from_coefficients : build from the paper's coefficients.
     SandwichSystem.from_theta : build from the parameter vector (2.5).
+    step_response : step response with a chosen amplitude.
+
+    Notes
+    -----
+    The system is nonlinear, so python-control's linear-only functions
+    (``ct.poles``, ``ct.bode_plot``, ``ct.dcgain``, ...) do not apply to
+    it; they do apply to `L1` and `L2`. ``ct.step_response(plant,
+    timepts)`` works but needs explicit time points and gives the unit
+    step only: with a backlash the response depends on the amplitude (a
+    step smaller than the dead band moves nothing), so use
+    ``sw.step_response(plant, amplitude=...)``.
+
+    The object pickles (``pickle``, ``copy.deepcopy``) with its name,
+    signal names and declared orders; the copy simulates bit for bit like
+    the original.
 
     Examples
     --------
@@ -91,6 +116,9 @@ class SandwichSystem(ct.InterconnectedSystem):
                  orders=None):
         num1, den1 = check_discrete_siso_tf('L1', L1)
         num2, den2 = check_discrete_siso_tf('L2', L2)
+        name = check_name('name', name)
+        inputs = check_label('inputs', inputs, 'input')
+        outputs = check_label('outputs', outputs, 'output')
         if not isinstance(backlash, Backlash):
             raise TypeError(
                 f"backlash must be a sandwichctl.Backlash (e.g. "
@@ -116,6 +144,20 @@ class SandwichSystem(ct.InterconnectedSystem):
             connections=[['backlash.x', 'L1.x'], ['L2.v', 'backlash.v']],
             inplist=['L1.u'], outlist=['L2.y'], inputs=inputs,
             outputs=outputs, dt=dt, name=name)
+
+    def __reduce__(self):
+        # python-control's state-space blocks hold closures, which pickle
+        # cannot store: rebuild from plain data instead (the transfer
+        # functions, the backlash parameters, the names, the orders).
+        return (_rebuild_sandwich, (type(self), self._L1, self._L2,
+                                    self._backlash_values, self.dt,
+                                    self.name, self.input_labels[0],
+                                    self.output_labels[0], self.orders))
+
+    def _settling_samples(self):
+        """Samples for the slowest linear mode to settle (step_response)."""
+        return _settling_samples([self._L1, self._L2],
+                                 self._coef1[2] + self._coef2[2])
 
     # ------------------------------------------------------------------
     # Parts and parametrisation
@@ -258,8 +300,10 @@ class SandwichSystem(ct.InterconnectedSystem):
         inputs, outputs : str, optional
             Names of the input and output signals.
 
-        The orders are those of the given coefficient arrays, zeros
-        included (see `SandwichSystem`'s ``orders``).
+        The orders are those of the given coefficient arrays, trailing
+        zeros included (see `SandwichSystem`'s ``orders``); the transfer
+        functions leave trailing zeros out, so they have no extra poles at
+        z = 0.
 
         Examples
         --------
@@ -270,11 +314,13 @@ class SandwichSystem(ct.InterconnectedSystem):
         >>> plant.L1.num[0][0], plant.L1.den[0][0]
         (array([1.5, 0. ]), array([1. , 0.1, 0.2]))
         """
-        L1 = _tf_from_coefficients('a', a, 'b', b, 'q1', q1, dt)
-        L2 = _tf_from_coefficients('c', c, 'd', d, 'q2', q2, dt)
-        orders = {'na': np.size(a), 'nb': np.size(b) - 1, 'nc': np.size(c),
-                  'nd': np.size(d) - 1}
-        return cls(L1, Backlash(m1, m2, D1, D2, dt=dt), L2, name=name,
+        dt = check_dt('dt', dt)
+        backlash = Backlash(m1, m2, D1, D2, dt=dt)
+        L1, a, b = _tf_from_coefficients('a', a, 'b', b, 'q1', q1, dt)
+        L2, c, d = _tf_from_coefficients('c', c, 'd', d, 'q2', q2, dt)
+        orders = {'na': a.size, 'nb': b.size - 1, 'nc': c.size,
+                  'nd': d.size - 1}
+        return cls(L1, backlash, L2, name=name,
                    inputs=inputs, outputs=outputs, orders=orders)
 
     @classmethod
@@ -300,9 +346,8 @@ class SandwichSystem(ct.InterconnectedSystem):
         sign : {1, -1}, optional
             Sign of the overall gain (default 1: the paper's b0 = d0 = 1).
         """
-        if isinstance(sign, bool) or sign not in (1, -1):
-            raise ValueError(f"sign must be 1 or -1; got {sign!r}")
-        na, nb, nc, nd = (check_int(n, v) for n, v in
+        check_option('sign', sign, (1, -1))
+        na, nb, nc, nd = (check_order(n, v) for n, v in
                           zip(('na', 'nb', 'nc', 'nd'), (na, nb, nc, nd)))
         theta = check_vector('theta', theta, nc + na + 4 + nb + nd)
         c, a = theta[:nc], theta[nc:nc + na]
@@ -332,7 +377,8 @@ class SandwichSystem(ct.InterconnectedSystem):
             ``[L1 states, x(-1), v(-1), L2 states]``. Default zeros.
         timepts : array_like, optional
             Time points, only used to label the result; default
-            ``dt * arange(N)``.
+            ``dt * arange(N)``. They must be evenly spaced by dt (one per
+            sample); other time points raise ValueError.
         internal : bool, optional
             If True, the outputs are the three signals y, x and v (rows in
             that order); otherwise just y.
@@ -346,6 +392,12 @@ class SandwichSystem(ct.InterconnectedSystem):
             ``resp.outputs`` is y (or y, x, v); ``resp.final_state`` is the
             state after the last sample, ready to continue the simulation.
 
+        Warns
+        -----
+        SimulationWarning
+            If the output stops being finite (an unstable system driven
+            into overflow); the message gives the first sample affected.
+
         Examples
         --------
         >>> import numpy as np, sandwichctl as sw
@@ -356,7 +408,11 @@ class SandwichSystem(ct.InterconnectedSystem):
         """
         u = check_signal('inputs', inputs)
         state = self._initial_state(initial_state)
+        internal = check_bool('internal', internal)
+        return_states = check_bool('return_states', return_states)
         n = u.size
+        if timepts is not None:
+            timepts = check_timepts('timepts', timepts, n, self.dt)
         y = np.empty(n)
         x, v = (np.empty(n), np.empty(n)) if internal else (y[:0], y[:0])
         states = np.empty((n if return_states else 0, self.nstates))
@@ -365,8 +421,7 @@ class SandwichSystem(ct.InterconnectedSystem):
         if timepts is None:
             step = 1.0 if self.dt is True else float(self.dt)
             timepts = step * np.arange(n)
-        else:
-            timepts = check_signal('timepts', timepts, length=n)
+        _warn_divergence(self.name, y, state, timepts)
         outputs = np.vstack([y, x, v]) if internal else y
         labels = ['y', 'x', 'v'] if internal else self.output_labels
         resp = ct.TimeResponseData(
@@ -379,8 +434,10 @@ class SandwichSystem(ct.InterconnectedSystem):
         return resp
 
     def _initial_state(self, initial_state):
-        if initial_state is None or (np.isscalar(initial_state)
-                                     and initial_state == 0):
+        if initial_state is None or (
+                isinstance(initial_state, (numbers.Real, np.number))
+                and not isinstance(initial_state, (bool, np.bool_))
+                and initial_state == 0):
             return np.zeros(self.nstates)
         return check_vector('initial_state', initial_state, self.nstates)
 
@@ -410,11 +467,104 @@ def theta_labels(na, nb, nc, nd):
     >>> sw.theta_labels(na=2, nb=0, nc=2, nd=1)
     ['c1', 'c2', 'a1', 'a2', 'm1', 'm2', 'D1', 'D2', 'd1']
     """
+    na, nb, nc, nd = (check_order(n, v) for n, v in
+                      zip(('na', 'nb', 'nc', 'nd'), (na, nb, nc, nd)))
     return ([f"c{i}" for i in range(1, nc + 1)]
             + [f"a{i}" for i in range(1, na + 1)]
             + ['m1', 'm2', 'D1', 'D2']
             + [f"b{i}" for i in range(1, nb + 1)]
             + [f"d{i}" for i in range(1, nd + 1)])
+
+
+def step_response(sys, timepts=None, amplitude=1.0, initial_state=None):
+    r"""Response of a sandwich (or compensator) to a step of given height.
+
+    The nonlinear counterpart of ``ct.step_response``: the response of a
+    system with a backlash depends on the step's height (a step smaller
+    than the dead band moves nothing), so `amplitude` is an argument, and
+    the time points are chosen from the linear blocks when not given.
+
+    Parameters
+    ----------
+    sys : SandwichSystem or SandwichCompensator or control.InputOutputSystem
+        A single-input system. sandwichctl's systems are simulated with
+        their compiled ``simulate``; any other discrete python-control
+        system with ``ct.input_output_response``.
+    timepts : array_like or float, optional
+        Time points (evenly spaced by ``sys.dt``), or the final time. By
+        default, long enough for the slowest pole of the linear blocks to
+        decay to 0.1% (at least 20 samples, at most 10,000; 100 samples
+        past the delays if a block has an integrator or is unstable).
+    amplitude : float, optional
+        Height of the step applied at t = 0 (default 1).
+    initial_state : array_like, optional
+        Initial state (default zeros: the system at rest).
+
+    Returns
+    -------
+    control.TimeResponseData
+        As from `SandwichSystem.simulate`; ``resp.plot()`` draws it.
+
+    Raises
+    ------
+    TypeError
+        If `sys` is not a single-input python-control system.
+    ValueError
+        If `amplitude` is not finite, the time points are not spaced by
+        dt, or no time points are given for a system whose settling time
+        cannot be told.
+
+    Examples
+    --------
+    >>> import sandwichctl as sw
+    >>> plant = sw.examples.paper_plant()
+    >>> small = sw.step_response(plant, timepts=range(5), amplitude=0.2)
+    >>> print(small.outputs)                  # inside the dead band
+    [0. 0. 0. 0. 0.]
+    >>> resp = sw.step_response(plant, amplitude=2.0)
+    >>> resp.time.size, round(float(resp.outputs[-1]), 2)
+    (34, 1.88)
+    """
+    if not isinstance(sys, ct.InputOutputSystem) or sys.ninputs != 1:
+        raise TypeError(
+            f"sys must be a single-input python-control system (e.g. a "
+            f"sw.SandwichSystem); got {type(sys).__name__}"
+            + (f" with {sys.ninputs} inputs"
+               if isinstance(sys, ct.InputOutputSystem) else ""))
+    if not sys.isdtime(strict=True):
+        raise ValueError(f"sys must be discrete-time; got dt={sys.dt!r}. "
+                         f"For a continuous system use ct.step_response")
+    amplitude = check_finite('amplitude', amplitude)
+    step = 1.0 if sys.dt is True else float(sys.dt)
+    if timepts is None:
+        settle = getattr(sys, '_settling_samples', None)
+        if settle is None and isinstance(sys, ct.LTI):
+            timepts = ct.step_response(sys).time
+        elif settle is None:
+            raise ValueError(
+                f"timepts is required for a {type(sys).__name__}: its "
+                f"settling time cannot be told from linear blocks")
+        else:
+            timepts = step * np.arange(settle())
+    elif np.ndim(timepts) == 0:
+        tfinal = check_finite('timepts', timepts)
+        if tfinal < 0:
+            raise ValueError(f"timepts, as a final time, must be >= 0; got "
+                             f"{tfinal}")
+        timepts = step * np.arange(int(np.floor(tfinal / step + 1e-9)) + 1)
+    else:
+        timepts = check_vector('timepts', timepts)
+        timepts = check_timepts('timepts', timepts, timepts.size, sys.dt)
+    u = np.full(len(timepts), amplitude)
+    x0 = 0 if initial_state is None else initial_state
+    if hasattr(sys, 'simulate'):
+        resp = sys.simulate(u, initial_state=initial_state, timepts=timepts)
+    elif isinstance(sys, ct.LTI):
+        resp = ct.forced_response(sys, timepts, u, x0)
+    else:
+        resp = ct.input_output_response(sys, timepts, u, x0)
+    resp.title = f"Step response of {sys.name} (amplitude {amplitude:g})"
+    return resp
 
 
 def _declare_orders(orders, coef1, coef2):
@@ -429,9 +579,10 @@ def _declare_orders(orders, coef1, coef2):
     out = []
     for (a, b, q), (na, nb, qn) in ((coef1, ('na', 'nb', 'q1')),
                                     (coef2, ('nc', 'nd', 'q2'))):
-        n_a = check_int(na, orders.get(na, a.size))
-        n_b = check_int(nb, orders.get(nb, b.size - 1))
-        if qn in orders and check_int(qn, orders[qn]) != q:
+        n_a = check_order(f"orders[{na!r}]", orders.get(na, a.size))
+        n_b = check_order(f"orders[{nb!r}]", orders.get(nb, b.size - 1))
+        if qn in orders and check_order(f"orders[{qn!r}]",
+                                        orders[qn]) != q:
             raise ValueError(f"orders[{qn!r}] = {orders[qn]} but the "
                              f"transfer function has a delay of {q}")
         if n_a < a.size or n_b < b.size - 1:
@@ -452,31 +603,82 @@ def _difference_coefficients(num, den):
 
 
 def _tf_from_coefficients(aname, a, bname, b, qname, q, dt):
-    """Transfer function in descending powers of z of eq. (2.1)."""
-    a = np.atleast_1d(np.asarray(a, dtype=float)) if np.size(a) else \
-        np.zeros(0)
-    b = np.atleast_1d(np.asarray(b, dtype=float))
-    q = check_int(qname, q)
-    if a.ndim != 1 or not np.all(np.isfinite(a)):
-        raise ValueError(f"{aname} must be a finite 1-D sequence; got {a}")
-    if b.ndim != 1 or b.size == 0 or not np.all(np.isfinite(b)):
-        raise ValueError(
-            f"{bname} must be a finite, non-empty 1-D sequence; got {b}")
+    """Transfer function in descending powers of z of eq. (2.1).
+
+    Returns it with the checked coefficient arrays. Trailing zeros of the
+    coefficients are left out of the transfer function (no extra poles at
+    z = 0); the caller keeps them as declared orders.
+    """
+    a = _coefficients(aname, a)
+    b = _coefficients(bname, b)
+    q = check_order(qname, q)
+    for name, arr in ((aname, a), (bname, b)):
+        if arr.size > MAX_ORDER + 1:
+            raise ValueError(f"{name} has {arr.size} coefficients; "
+                             f"sandwichctl accepts orders up to {MAX_ORDER}")
+    if b.size == 0:
+        raise ValueError(f"{bname} must hold at least {bname}0; got an "
+                         f"empty sequence")
     if b[0] == 0:
         raise ValueError(
             f"{bname}[0] is 0, but eq. (2.1) needs the leading coefficient "
             f"{bname}0 != 0 (it is normalised to 1); express a delay with "
             f"{qname} instead of leading zeros")
-    if dt is None or dt is False or (dt is not True and not dt > 0):
-        raise ValueError(f"dt must be a positive sampling time or True; "
-                         f"got {dt!r}")
-    n = max(a.size, q + b.size - 1)
+    a_tf, b_tf = np.trim_zeros(a, 'b'), np.trim_zeros(b, 'b')
+    n = max(a_tf.size, q + b_tf.size - 1)
     den = np.zeros(n + 1)
     den[0] = 1.0
-    den[1:a.size + 1] = a
+    den[1:a_tf.size + 1] = a_tf
     num = np.zeros(n + 1)
-    num[q:q + b.size] = b
-    return ct.tf(num, den, dt)
+    num[q:q + b_tf.size] = b_tf
+    return ct.tf(num, den, dt), a, b
+
+
+def _coefficients(name, values):
+    """A finite 1-D coefficient array (a lone number is one coefficient)."""
+    if isinstance(values, (numbers.Real, np.number)) and not isinstance(
+            values, (bool, np.bool_)):
+        values = [check_finite(f"{name}[0]", values)]
+    return check_vector(name, values)
+
+
+def _rebuild_sandwich(cls, L1, L2, backlash_values, dt, name, inputs,
+                      outputs, orders):
+    """Unpickle a SandwichSystem (see SandwichSystem.__reduce__)."""
+    return cls(L1, Backlash(*backlash_values, dt=dt), L2, name=name,
+               inputs=inputs, outputs=outputs, orders=orders)
+
+
+def _settling_samples(blocks, delay):
+    """Samples for the slowest pole of `blocks` to decay to 0.1%."""
+    radius = 0.0
+    for sys in blocks:
+        den = np.trim_zeros(np.asarray(sys.den[0][0], float), 'f')
+        if den.size > 1:
+            radius = max(radius, float(np.max(np.abs(np.roots(den)))))
+    if radius >= 1.0:                     # integrator or unstable
+        return 100 + delay
+    if radius == 0.0:                     # finite impulse response
+        return 20 + delay
+    tau = -1.0 / np.log(radius)
+    return int(min(max(np.ceil(7.0 * tau) + delay, 20), 10_000))
+
+
+def _warn_divergence(name, y, state, timepts):
+    """SimulationWarning if the simulated output stopped being finite."""
+    if np.isfinite(y[-1]) and np.all(np.isfinite(state)) \
+            and np.all(np.isfinite(y)):
+        return
+    bad = ~np.isfinite(y)
+    if not bad.any():
+        warn(f"the simulation of {name} ended with a non-finite state: the "
+             f"system is unstable or the input too large for it",
+             SimulationWarning)
+        return
+    k = int(np.flatnonzero(bad)[0])
+    warn(f"the simulation of {name} diverged: the output is {y[k]} from "
+         f"sample {k} (t = {timepts[k]:g}) on; the system is unstable or "
+         f"the input too large for it", SimulationWarning)
 
 
 def _difference_equation(out, inp, a, b, q):

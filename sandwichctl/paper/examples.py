@@ -134,7 +134,7 @@ def add_noise(y, snr, seed=None, kind='variance'):
     >>> round(float(10 * np.log10(np.var(y) / np.var(noisy - y))), 1)
     46.5
     """
-    y = np.asarray(y, dtype=float)
+    y = check_signal('y', y)
     snr = check_positive('snr', snr)
     if kind not in SNR_KINDS:
         raise ValueError(f"kind must be one of {sorted(SNR_KINDS)}; got "

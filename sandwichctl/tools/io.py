@@ -50,7 +50,10 @@ eqs. (2.1)-(2.2), as `SandwichSystem.coefficients` returns them)::
     ``"u"`` and ``"y"``).
 ``a``, ``b``, ``q1``
     L1 of eq. (2.1): ``a`` = [a1, ..., a_na] (may be empty), ``b`` =
-    [b0, ..., b_nb] with b0 != 0, and the delay ``q1`` in samples.
+    [b0, ..., b_nb] with b0 != 0, and the delay ``q1`` in samples. The
+    lengths of the lists are the model's (declared) orders: trailing
+    zeros are kept, so a model declared with na = 3 whose a3 is 0 is
+    loaded with na = 3.
 ``c``, ``d``, ``q2``
     L2 of eq. (2.1), likewise.
 ``m1``, ``m2``, ``D1``, ``D2``
@@ -59,19 +62,26 @@ eqs. (2.1)-(2.2), as `SandwichSystem.coefficients` returns them)::
     Free-form JSON object (where the data came from, the identifier
     settings, the date, ...); sandwichctl does not interpret it.
 
-Readers reject other ``format`` values, versions they do not know and
-files with missing keys; unknown extra keys are ignored.
+Readers reject other ``format`` values, versions they do not know,
+files with missing keys or with values of the wrong type (each error
+names the file and the key), orders above 1000, and files larger than
+16 MiB; unknown extra keys are ignored.
 """
 
 import json
+import math
 import numbers
 import os
 import re
 
 import numpy as np
 
-from ..model.backlash import Backlash
 from ..model.sandwich import SandwichSystem
+from .._checks import MAX_ORDER, check_bool
+
+#: Largest file `load_model` reads: a model is a few hundred bytes, plus
+#: its metadata.
+_MAX_BYTES = 16 * 2 ** 20
 
 __all__ = ['save_model', 'load_model', 'FORMAT_VERSION']
 
@@ -84,7 +94,7 @@ _REQUIRED = ('version', 'name', 'dt', 'a', 'b', 'q1', 'c', 'd', 'q2',
 
 
 def save_model(model, path, metadata=None):
-    """Save a `SandwichSystem` to a JSON file (format in `sandwichctl.io`).
+    """Save a `SandwichSystem` to a JSON file (format in `sandwichctl.tools.io`).
 
     Parameters
     ----------
@@ -121,6 +131,7 @@ def save_model(model, path, metadata=None):
     >>> bool((loaded.theta == plant.theta).all())
     True
     """
+    _check_path(path, 'write')
     try:
         text = _dumps(_to_dict(model, metadata))
     except ValueError as exc:
@@ -160,7 +171,7 @@ def load_model(path, return_metadata=False):
 
     See Also
     --------
-    save_model : the inverse; the format is described in `sandwichctl.io`.
+    save_model : the inverse; the format is described in `sandwichctl.tools.io`.
 
     Examples
     --------
@@ -173,13 +184,30 @@ def load_model(path, return_metadata=False):
     >>> model.orders, meta
     ({'na': 2, 'nb': 0, 'nc': 2, 'nd': 1, 'q1': 1, 'q2': 1}, {})
     """
+    _check_path(path, 'read')
+    return_metadata = check_bool('return_metadata', return_metadata)
     where = _describe(path)
     try:
         if hasattr(path, 'read'):
-            data = json.load(path)
+            text = path.read(_MAX_BYTES + 1)
         else:
-            with open(os.fspath(path), encoding='utf-8') as f:
-                data = json.load(f)
+            with open(os.fspath(path), 'rb') as f:
+                text = f.read(_MAX_BYTES + 1)
+    except OSError as exc:
+        raise OSError(f"cannot read the model file {where}: {exc}") from exc
+    if len(text) > _MAX_BYTES:
+        raise ValueError(f"{where} is larger than {_MAX_BYTES // 2 ** 20} "
+                         f"MiB: not a sandwichctl model file")
+    if isinstance(text, bytes):
+        try:
+            text = text.decode('utf-8')
+        except UnicodeDecodeError:
+            raise ValueError(
+                f"{where} is not a sandwichctl model file: it is binary, not "
+                f"UTF-8 JSON text (a .npy or .npz array? load those with "
+                f"numpy)") from None
+    try:
+        data = json.loads(text)
     except json.JSONDecodeError as exc:
         raise ValueError(f"{where} is not valid JSON ({exc}); expected a "
                          f"model written by sandwichctl.save_model") from None
@@ -231,7 +259,7 @@ def _from_dict(data, where):
             f"{where} is not a sandwichctl model file: expected \"format\": "
             f"\"{_FORMAT_TAG}\", got {found!r}")
     version = data.get('version', FORMAT_VERSION)   # missing: see below
-    if version != FORMAT_VERSION:
+    if isinstance(version, bool) or version != FORMAT_VERSION:
         raise ValueError(
             f"{where} has model format version {version!r}, but this "
             f"sandwichctl reads version {FORMAT_VERSION}; "
@@ -244,29 +272,80 @@ def _from_dict(data, where):
                          f"version-1 model file needs {list(_REQUIRED)}")
     metadata = data.get('metadata', {})
     if not isinstance(metadata, dict):
-        raise ValueError(f"{where}: metadata must be a JSON object; got "
+        raise ValueError(f"{where}: 'metadata' must be a JSON object; got "
                          f"{type(metadata).__name__}")
-    for key in ('a', 'b', 'c', 'd'):
-        if not isinstance(data[key], list):
-            raise ValueError(f"{where}: {key!r} must be a list of numbers; "
-                             f"got {data[key]!r}")
+    fields = {key: _coefficient_list(where, key, data[key], key in 'bd')
+              for key in ('a', 'b', 'c', 'd')}
+    for key in ('q1', 'q2'):
+        fields[key] = _integer(where, key, data[key])
+    for key in ('m1', 'm2', 'D1', 'D2'):
+        fields[key] = _number(where, key, data[key])
     dt = data['dt']
     if not (dt is True or (isinstance(dt, numbers.Real)
-                           and not isinstance(dt, bool))):
+                           and not isinstance(dt, bool)
+                           and math.isfinite(dt) and dt > 0)):
         raise ValueError(f"{where}: 'dt' must be a positive number or true;"
                          f" got {dt!r}")
+    for key, default in (('name', None), ('inputs', 'u'), ('outputs', 'y')):
+        value = data.get(key, default)
+        if not (isinstance(value, str) and value) and not (
+                key == 'name' and value is None):
+            raise ValueError(
+                f"{where}: {key!r} must be a non-empty string"
+                + (" or null" if key == 'name' else "")
+                + f"; got {value!r}")
+        fields[key] = value
     try:
-        base = SandwichSystem.from_coefficients(
-            a=data['a'], b=data['b'], c=data['c'], d=data['d'],
-            m1=data['m1'], m2=data['m2'], D1=data['D1'], D2=data['D2'],
-            q1=data['q1'], q2=data['q2'], dt=dt)
+        model = SandwichSystem.from_coefficients(dt=dt, **fields)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{where} holds an invalid model: {exc}") from None
-    model = SandwichSystem(
-        base.L1, Backlash(data['m1'], data['m2'], data['D1'], data['D2'],
-                          dt=dt), base.L2, name=data['name'],
-        inputs=data.get('inputs', 'u'), outputs=data.get('outputs', 'y'))
     return model, metadata
+
+
+def _coefficient_list(where, key, value, leading):
+    """A list of finite numbers (at most MAX_ORDER + 1 of them)."""
+    if not isinstance(value, list):
+        raise ValueError(f"{where}: {key!r} must be a list of numbers; got "
+                         f"{type(value).__name__} {_short(value)}")
+    if len(value) > MAX_ORDER + 1:
+        raise ValueError(f"{where}: {key!r} has {len(value)} coefficients; "
+                         f"orders above {MAX_ORDER} are not accepted")
+    if leading and not value:
+        raise ValueError(f"{where}: {key!r} must hold at least {key}0")
+    for i, item in enumerate(value):
+        _number(where, f"{key}[{i}]", item)
+    return [float(v) for v in value]
+
+
+def _number(where, key, value):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ValueError(f"{where}: {key!r} must be a number; got "
+                         f"{type(value).__name__} {_short(value)}")
+    if not math.isfinite(value):
+        raise ValueError(f"{where}: {key!r} must be finite; got {value!r}")
+    return float(value)
+
+
+def _integer(where, key, value):
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ValueError(f"{where}: {key!r} must be an integer; got "
+                         f"{type(value).__name__} {_short(value)}")
+    if not 0 <= value <= MAX_ORDER:
+        raise ValueError(f"{where}: {key!r} must be between 0 and "
+                         f"{MAX_ORDER}; got {value}")
+    return value
+
+
+def _short(value):
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + '...'
+
+
+def _check_path(path, mode):
+    if not (isinstance(path, (str, os.PathLike)) or hasattr(path, mode)):
+        raise TypeError(f"path must be a file name (str or os.PathLike) or "
+                        f"an open text file; got {type(path).__name__} "
+                        f"{_short(path)}")
 
 
 def _dumps(data):

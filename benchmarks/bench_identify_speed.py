@@ -1,0 +1,118 @@
+"""Speed of identification (issue 16, item 3).
+
+Prints, in one run, the medians of repeated runs of
+
+(a) ``sw.identify`` (method 'oe') on the paper's example, N = 5,000,
+    noise-free and at SNR 46.5 (target <= 0.4 s);
+(b) ``sw.identify`` against N = 1k ... 100k (paper plant, SNR 100), with
+    the time per sample, which stays flat if the time grows linearly;
+(c) the paper's bundle recursion, ``method='bundle'`` (eta0 = 0.015,
+    k1 = 6), in microseconds per sample (target <= 25 us);
+(d) ``sw.refine`` from one start (the true theta + 5 %) on 10,000 samples.
+
+Timings on a shared machine are noisy; each figure is a median, and the
+header says how many BLAS threads numpy may use (OPENBLAS_NUM_THREADS etc.
+as set in the environment).
+
+Run: python benchmarks/bench_identify_speed.py
+"""
+
+import os
+import sys
+import warnings
+
+sys.path.insert(0, os.path.dirname(__file__))
+import sandwichctl as sw                                   # noqa: E402
+from _timing import median_time, print_table               # noqa: E402
+
+PLANT = sw.examples.paper_plant()
+ORDERS = PLANT.orders
+
+
+def data(n, snr=None, seed=0):
+    """The paper's input and the plant's output, with noise at `snr`."""
+    u = sw.examples.paper_input(n, seed=seed)
+    y = PLANT.simulate(u).outputs
+    if snr is not None:
+        y = sw.examples.add_noise(y, snr, seed=seed + 1000)
+    return u, y
+
+
+def identify(u, y, **kwargs):
+    with warnings.catch_warnings():     # speed only: the verdicts elsewhere
+        warnings.simplefilter('ignore')
+        return sw.identify(u, y, **ORDERS, **kwargs)
+
+
+def paper_example():
+    rows = []
+    for label, snr in (('noise-free', None), ('SNR 46.5', 46.5)):
+        u, y = data(5000, snr, seed=1)
+        t = median_time(lambda: identify(u, y), repeat=7)
+        err = sw.parameter_error(identify(u, y).theta, PLANT.theta)
+        rows.append([label, '5,000', f'{t:.3f} s', '<= 0.4 s',
+                     'yes' if t <= 0.4 else 'no', f'{err:.1e}'])
+    print("(a) sw.identify on the paper's example (method 'oe')\n")
+    print_table(['data', 'N', 'median time', 'target', 'met',
+                 'parameter error'], rows)
+
+
+def against_n():
+    sizes = (1_000, 2_000, 5_000, 10_000, 20_000, 50_000, 100_000)
+    rows, first = [], None
+    for n in sizes:
+        u, y = data(n, snr=100, seed=2)
+        repeat = 5 if n <= 10_000 else 3
+        t = median_time(lambda: identify(u, y), repeat=repeat)
+        per = t / n * 1e6
+        first = first or per
+        rows.append([f'{n:,}', f'{t:.3f} s', f'{per:.1f} us',
+                     f'{per / first:.2f}', repeat])
+    print("\n(b) sw.identify against N (paper plant, SNR 100); linear growth "
+          "keeps time/N flat\n")
+    print_table(['N', 'median time', 'time / N', 'relative to 1k',
+                 'repeats'], rows)
+
+
+def bundle():
+    rows = []
+    for n in (2_000, 5_000, 10_000):
+        u, y = data(n, snr=None, seed=3)
+        t = median_time(lambda: identify(u, y, method='bundle', eta0=0.015,
+                                         k1=6), repeat=5)
+        per = t / n * 1e6
+        rows.append([f'{n:,}', f'{t:.3f} s', f'{per:.1f} us', '<= 25 us',
+                     'yes' if per <= 25 else 'no'])
+    print("\n(c) the bundle recursion, sw.identify(method='bundle', "
+          "eta0=0.015, k1=6), noise-free\n")
+    print_table(['N', 'median time', 'per sample', 'target', 'met'], rows)
+
+
+def refine_one_start():
+    u, y = data(10_000, snr=100, seed=4)
+    start = sw.SandwichSystem.from_theta(PLANT.theta * 1.05, **ORDERS)
+    t = median_time(lambda: sw.refine(start, u, y), repeat=5)
+    res = sw.refine(start, u, y)
+    print("\n(d) sw.refine from one start (true theta + 5 %), N = 10,000, "
+          "SNR 100\n")
+    print_table(['N', 'median time', 'iterations', 'per iteration',
+                 'parameter error'],
+                [['10,000', f'{t:.3f} s', res.nit,
+                  f'{t / max(res.nit, 1) * 1e3:.1f} ms',
+                  f'{sw.parameter_error(res.theta, PLANT.theta):.1e}']])
+
+
+def main():
+    threads = {k: os.environ.get(k, 'unset') for k in
+               ('OPENBLAS_NUM_THREADS', 'OMP_NUM_THREADS', 'MKL_NUM_THREADS')}
+    print(f"Identification speed, medians of repeated runs; {os.cpu_count()} "
+          f"cores; " + ', '.join(f"{k}={v}" for k, v in threads.items())
+          + "\n")
+    paper_example()
+    against_n()
+    bundle()
+    refine_one_start()
+
+
+if __name__ == '__main__':
+    main()

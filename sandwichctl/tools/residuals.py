@@ -1,0 +1,331 @@
+r"""Residual analysis of a model on measured data (MATLAB's ``resid``).
+
+A model that explains the data leaves residuals
+
+.. math:: e(t) = y(t) - \hat y(t)
+
+(here :math:`\hat y` is the free-run simulation from rest) that are white
+and independent of past inputs. `residuals` computes, over N samples with
+the means of e and u removed,
+
+.. math::
+
+    r_e(\tau) = \frac{R_e(\tau)}{R_e(0)}, \quad \tau = 0, \dots, L,
+    \qquad
+    r_{ue}(\tau) = \frac{R_{ue}(\tau)}{\sqrt{R_e(0)\,R_u(0)}},
+    \quad \tau = -L, \dots, L,
+
+with :math:`R_e(\tau) = \frac1N \sum_t e(t)\,e(t+\tau)` and
+:math:`R_{ue}(\tau) = \frac1N \sum_t u(t)\,e(t+\tau)`. A positive lag
+:math:`\tau` correlates the residual with the input :math:`\tau` samples
+*earlier*: a large value there is input dynamics the model misses; a
+large value at a negative lag means the residual feeds back into the
+input (closed-loop data). If e is white and independent of u, each
+normalised correlation is approximately normal with standard deviation
+:math:`1/\sqrt N`, so 99 % of them fall inside the band
+:math:`\pm 2.58/\sqrt N`: about one lag in a hundred outside is chance,
+many are a model defect.
+
+With several experiments, each is simulated from rest and the sums run
+over the experiments (a lag never crosses from one experiment into the
+next).
+"""
+
+import numbers
+
+import numpy as np
+import control as ct
+
+from ..model.sandwich import SandwichSystem
+from .experiments import as_experiments
+from .._checks import check_int
+
+__all__ = ['residuals', 'ResidualResult']
+
+#: Two-sided 99 % point of the standard normal distribution.
+_Z99 = 2.58
+
+
+class ResidualResult:
+    """Residual correlations of a model on data, from `residuals`.
+
+    Attributes
+    ----------
+    name : str
+        Name of the model.
+    residuals : list of ndarray
+        The residuals y - yhat of each experiment (free-run simulation
+        from rest), means not removed.
+    lags : ndarray, shape (L + 1,)
+        0, 1, ..., L.
+    autocorrelation : ndarray, shape (L + 1,)
+        Normalised autocorrelation of the residuals at `lags` (1 at 0).
+    cross_lags : ndarray, shape (2 L + 1,)
+        -L, ..., L.
+    cross_correlation : ndarray, shape (2 L + 1,)
+        Normalised correlation of the input with the residuals
+        `cross_lags` samples later.
+    bound : float
+        Half-width of the 99 % confidence band, 2.58 / sqrt(N).
+    n_samples : int
+        N, the number of samples over all experiments.
+    outside_auto : int
+        How many of the autocorrelations at lags 1..L are outside the band.
+    outside_cross : int
+        How many of the cross-correlations at lags -L..L are outside it.
+    axes : ndarray of matplotlib.axes.Axes or None
+        The two axes plotted on, or None if nothing was plotted.
+    """
+
+    def __init__(self, name, errors, lags, auto, cross, n_samples):
+        self.name = name
+        self.residuals = errors
+        self.lags = np.arange(lags + 1)
+        self.autocorrelation = auto
+        self.cross_lags = np.arange(-lags, lags + 1)
+        self.cross_correlation = cross
+        self.n_samples = int(n_samples)
+        self.bound = _Z99 / np.sqrt(n_samples)
+        self.outside_auto = int(np.sum(np.abs(auto[1:]) > self.bound))
+        self.outside_cross = int(np.sum(np.abs(cross) > self.bound))
+        self.axes = None
+
+    @property
+    def max_lag(self):
+        """L, the largest lag."""
+        return int(self.lags[-1])
+
+    def plot(self, ax=None):
+        """Plot both correlations with their 99 % band, in two panels.
+
+        Parameters
+        ----------
+        ax : sequence of two matplotlib.axes.Axes, optional
+            Axes for the autocorrelation and the cross-correlation;
+            default a new figure.
+
+        Returns
+        -------
+        ndarray of matplotlib.axes.Axes
+            The two axes.
+        """
+        import matplotlib.pyplot as plt
+
+        if ax is None:
+            _, ax = plt.subplots(2, 1, figsize=(7, 5.5),
+                                 constrained_layout=True)
+        elif not (isinstance(ax, (list, tuple, np.ndarray))
+                  and len(ax) == 2):
+            raise TypeError(
+                f"ax must be a sequence of two matplotlib Axes (the "
+                f"autocorrelation and the cross-correlation panels); got "
+                f"{type(ax).__name__}")
+        axes = np.asarray(ax, dtype=object)
+        panels = [
+            (axes[0], self.lags, self.autocorrelation, self.outside_auto,
+             f"autocorrelation of the residuals of {self.name}", 'lag'),
+            (axes[1], self.cross_lags, self.cross_correlation,
+             self.outside_cross,
+             f"cross-correlation of u and the residuals of {self.name}",
+             'lag (u leads e by this many samples)')]
+        for a, lag, r, outside, title, xlabel in panels:
+            a.axhspan(-self.bound, self.bound, color='C0', alpha=0.15,
+                      label=f"99 % band (±{self.bound:.3g})")
+            a.vlines(lag, 0, r, color='C0', lw=1.5)
+            inside = np.abs(r) <= self.bound
+            if lag[0] == 0:
+                inside[0] = True              # r_e(0) = 1 by definition
+            a.plot(lag[inside], r[inside], 'o', color='C0', ms=3.5)
+            a.plot(lag[~inside], r[~inside], 'o', color='C3', ms=4.5,
+                   label=f"{outside} outside")
+            a.axhline(0, color='k', lw=0.6)
+            a.set_title(title, fontsize='medium')
+            a.set_xlabel(xlabel)
+            a.legend(fontsize='small', loc='upper right')
+        self.axes = axes
+        return axes
+
+    def __repr__(self):
+        n_auto, n_cross = self.max_lag, self.cross_lags.size
+        return (
+            f"ResidualResult of {self.name!r} on {self.n_samples} samples "
+            f"(99 % band +-{self.bound:.3g})\n"
+            f"  autocorrelation,    lags 1..{n_auto}: {self.outside_auto} "
+            f"of {n_auto} outside the band\n"
+            f"  cross-correlation u->e, lags -{n_auto}..{n_auto}: "
+            f"{self.outside_cross} of {n_cross} outside the band\n"
+            f"  (about 1 % outside is chance; many outside is a model "
+            f"defect)")
+
+
+def _read(data, name='data'):
+    """`as_experiments` of `data`, also taking one (u, y) pair as a tuple."""
+    if (isinstance(data, (tuple, list)) and len(data) == 2
+            and not any(isinstance(d, (ct.TimeResponseData, tuple, list))
+                        for d in data)
+            and all(np.ndim(d) == 1 for d in data)):
+        return as_experiments(data[0], data[1])
+    try:
+        return as_experiments(data)
+    except (TypeError, ValueError) as err:
+        if name == 'data':
+            raise
+        raise type(err)(f"{name}: {err}") from None
+
+
+def _simulate(model, u, dt):
+    """Free-run output of `model` from rest on the input u (one
+    experiment)."""
+    name = getattr(model, 'name', None) or 'model'
+    if isinstance(model, SandwichSystem):
+        with np.errstate(over='ignore', invalid='ignore'):
+            yhat = model.simulate(u).outputs
+    else:
+        t = (float(model.dt) if isinstance(model.dt, numbers.Real)
+             and not isinstance(model.dt, bool) else 1.0) * np.arange(u.size)
+        with np.errstate(over='ignore', invalid='ignore'):
+            yhat = ct.forced_response(model, t, u).outputs
+    yhat = np.asarray(yhat, dtype=float).reshape(-1)
+    if not np.all(np.isfinite(yhat)):
+        first = int(np.flatnonzero(~np.isfinite(yhat))[0])
+        raise ValueError(f"the simulated output of model {name!r} is not "
+                         f"finite (first bad sample {first}); the model is "
+                         f"probably unstable")
+    return yhat
+
+
+def _check_model(model, dt):
+    """The system to simulate: a SandwichSystem or a discrete SISO LTI
+    model (an identification result gives its ``model``)."""
+    inner = getattr(model, 'model', None)
+    if not isinstance(model, ct.InputOutputSystem) and \
+            isinstance(inner, ct.InputOutputSystem):
+        model = inner
+    if isinstance(model, SandwichSystem):
+        pass
+    elif isinstance(model, (ct.TransferFunction, ct.StateSpace)):
+        if model.ninputs != 1 or model.noutputs != 1:
+            raise ValueError(
+                f"model must be single-input single-output; {model.name!r} "
+                f"has {model.ninputs} inputs and {model.noutputs} outputs")
+        if not model.isdtime():
+            raise ValueError(
+                f"model must be discrete-time (the residuals are those of "
+                f"the sampled data); {model.name!r} has dt={model.dt!r}: "
+                f"discretise it first, e.g. with ct.c2d(model, dt)")
+    else:
+        raise TypeError(
+            f"model must be a SandwichSystem or a discrete-time linear "
+            f"system (ct.tf, ct.ss), or an identification result; got "
+            f"{type(model).__name__}")
+    m_dt = model.dt
+    if (isinstance(dt, numbers.Real) and not isinstance(dt, bool)
+            and isinstance(m_dt, numbers.Real)
+            and not isinstance(m_dt, bool)
+            and abs(float(m_dt) - dt) > 1e-9 * dt):
+        raise ValueError(f"the data are sampled at dt = {dt:g} but model "
+                         f"{model.name!r} has dt = {float(m_dt):g}")
+    return model
+
+
+def residuals(model, data, lags=25, ax=None, plot=True):
+    r"""Residual autocorrelation and input-residual cross-correlation.
+
+    Like MATLAB's ``resid``: the model is simulated from rest on the
+    measured input, and the correlations of the residuals e = y - yhat
+    with themselves (lags 0 to `lags`) and with the input (lags -`lags`
+    to `lags`) are computed with their 99 % confidence band
+    :math:`\pm 2.58/\sqrt N` (module documentation). A model that
+    explains the data leaves almost every lag inside the band.
+
+    Parameters
+    ----------
+    model : SandwichSystem, control.TransferFunction or control.StateSpace
+        The model: a sandwich (simulated with its fast kernel) or a
+        discrete-time single-input single-output linear model (simulated
+        with ``ct.forced_response``). An identification result is also
+        accepted (its ``model`` is used).
+    data : tuple, control.TimeResponseData or list
+        The measured data as the model sees them (offsets removed as for
+        the identification): a ``(u, y)`` pair of arrays, a record, or a
+        list of experiments (see `as_experiments`).
+    lags : int, optional
+        Largest lag L (default 25), at least 1 and below the length of
+        the shortest experiment.
+    ax : sequence of two matplotlib.axes.Axes, optional
+        Axes of the two panels; default a new figure.
+    plot : bool, optional
+        Plot the two panels (default True); False only computes.
+
+    Returns
+    -------
+    ResidualResult
+        The residuals, ``autocorrelation`` at ``lags``,
+        ``cross_correlation`` at ``cross_lags``, the ``bound`` of the band
+        and how many lags fall outside it (``outside_auto``,
+        ``outside_cross``); it prints as a summary.
+
+    Raises
+    ------
+    TypeError
+        If `model` is not a supported system, or `data` is not one of the
+        accepted forms.
+    ValueError
+        If `lags` is out of range, the data are not finite, the model is
+        not SISO, is continuous-time, has another sampling time than the
+        data, or its simulation is not finite (unstable), or the
+        residuals or the input are constant.
+
+    See Also
+    --------
+    compare : the simulated output over the measured one.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import sandwichctl as sw
+    >>> plant = sw.examples.paper_plant()
+    >>> u = sw.examples.paper_input(4000, seed=1)
+    >>> y = plant.simulate(u).outputs
+    >>> y = y + 0.05 * np.random.default_rng(2).standard_normal(u.size)
+    >>> good = sw.residuals(plant, (u, y), plot=False)
+    >>> good.outside_auto <= 2, good.outside_cross <= 2
+    (True, True)
+    >>> linear = sw.identify_linear(u, y, nb=3, nf=4, nk=2).model
+    >>> bad = sw.residuals(linear, (u, y), plot=False)
+    >>> bad.outside_auto > 10
+    True
+    """
+    exps = _read(data)
+    model = _check_model(model, exps.dt)
+    shortest = min(u.size for u in exps.u)
+    lags = check_int('lags', lags, minimum=1)
+    if lags >= shortest:
+        raise ValueError(f"lags must be below the length of the shortest "
+                         f"experiment ({shortest} samples); got {lags}")
+    errors, r_e, r_ue = [], np.zeros(lags + 1), np.zeros(2 * lags + 1)
+    s_e = s_u = 0.0
+    for u, y in exps:
+        e = y - _simulate(model, u, exps.dt)
+        errors.append(e)
+        ec, uc = e - e.mean(), u - u.mean()
+        n = e.size
+        r_e += [ec[:n - k] @ ec[k:] for k in range(lags + 1)]
+        # R_ue(k) = sum_t u(t) e(t + k), for k = -L..L
+        r_ue += [uc[:n - k] @ ec[k:] if k >= 0 else uc[-k:] @ ec[:n + k]
+                 for k in range(-lags, lags + 1)]
+        s_e += ec @ ec
+        s_u += uc @ uc
+    name = getattr(model, 'name', None) or 'model'
+    if not s_e > 0:
+        raise ValueError(f"the residuals of model {name!r} are constant (a "
+                         f"perfect fit up to an offset); their correlation "
+                         f"is undefined")
+    if not s_u > 0:
+        raise ValueError("the input u is constant, so its correlation with "
+                         "the residuals is undefined")
+    result = ResidualResult(name, errors, lags, r_e / s_e,
+                            r_ue / np.sqrt(s_e * s_u), exps.n_samples)
+    if plot:
+        result.plot(ax)
+    return result
