@@ -425,3 +425,20 @@ def _as_real_scalar(name, value):
 
 def _is_str(value):
     return isinstance(value, (str, bytes))
+
+
+# ----------------------------------------------------------------------
+# Progress bars
+# ----------------------------------------------------------------------
+def progress_bar(enabled, **kwargs):
+    """A tqdm bar: the notebook widget in Jupyter, text in a terminal.
+
+    ``tqdm.auto`` is imported only when a bar is asked for, so that a
+    notebook without ipywidgets sees no warning unless it shows progress;
+    otherwise a disabled plain bar is returned (it does nothing).
+    """
+    if enabled:
+        from tqdm.auto import tqdm
+        return tqdm(**kwargs)
+    from tqdm import tqdm
+    return tqdm(disable=True, **kwargs)

@@ -50,7 +50,7 @@ from ._oe import Structure, lm
 from .result import IdentificationResult, backlash_significance, whiteness
 from ..model.sandwich import SandwichSystem
 from ._data import prepare, scale as _scale
-from .._checks import (check_int, check_positive, warn,
+from .._checks import (check_int, check_positive, warn, progress_bar,
                        IdentificationWarning)
 
 __all__ = ['refine']
@@ -323,5 +323,4 @@ def _progress_range(n, progress, desc, step=1):
     steps = range(0, n, step)
     if not progress:
         return steps
-    from tqdm.auto import tqdm       # only when asked: in a notebook it
-    return tqdm(steps, desc=desc, leave=False)  # needs ipywidgets
+    return progress_bar(True, iterable=steps, desc=desc, leave=False)

@@ -39,6 +39,7 @@ from .batch import Problem, refine as _refine, _progress_range, \
 from .linear import _fit_oe, oe_transfer_function
 from .recursive import RecursiveIdentifier, DEFAULTS
 from .._checks import (check_int, check_order, check_positive, warn,
+                       progress_bar,
                        ExcitationWarning, SimulationWarning,
                        SandwichWarning, IdentificationWarning)
 
@@ -461,20 +462,10 @@ def _random_start(st, u, rng):
     return phi
 
 
-class _NoBar:
-    def update(self, n=1):
-        pass
-
-    def close(self):
-        pass
-
-
 def _progress(progress, total):
-    """A tqdm bar over the starts when asked for, else a do-nothing one."""
-    if not progress:
-        return _NoBar()
-    from tqdm.auto import tqdm       # only when asked (see batch)
-    return tqdm(total=total, desc='identify: starts', leave=False)
+    """A tqdm bar over the starts when asked for, else a disabled one."""
+    return progress_bar(progress, total=total, desc='identify: starts',
+                        leave=False)
 
 
 def _recursive_start(prob, orders):

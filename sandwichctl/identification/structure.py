@@ -31,13 +31,13 @@ import warnings
 from html import escape
 
 import numpy as np
-from tqdm.auto import tqdm
 
 from .linear import identify_linear
 from .pipeline import identify
 from ..tools.experiments import _check_dt
 from ..tools.residuals import _read, _simulate
 from ..tools.validation import fit_percent
+from .._checks import progress_bar
 
 __all__ = ['select_structure', 'StructureTable']
 
@@ -469,8 +469,8 @@ def select_structure(data, orders=None, delays=None, validation=None,
     integ = options.get('integrators', 'auto')
     start = time.perf_counter()
     rows = []
-    with tqdm(total=len(structures) + len(linears), desc='select_structure',
-              disable=not progress) as bar:
+    with progress_bar(progress, total=len(structures) + len(linears),
+                      desc='select_structure') as bar:
         for s in structures:
             o = dict(zip(_ORDER_KEYS + _DELAY_KEYS, s))
             label = (f"sandwich {s[0]}/{s[1]}/{s[2]}/{s[3]}, "
