@@ -52,11 +52,11 @@ from contextlib import contextmanager
 
 import numpy as np
 import control as ct
-from tqdm.auto import tqdm
 
 from ..tools.experiments import as_experiments
 from .pipeline import identify
-from .._checks import check_int
+from .._checks import (check_bool, check_int, check_option, check_order,
+                       progress_bar)
 
 __all__ = ['identify_many']
 
@@ -184,7 +184,8 @@ def identify_many(datasets, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     >>> all(r.success for r in results)
     True
     """
-    errors = _check_errors(errors)
+    errors = check_option('errors', errors, ERRORS)
+    progress = check_bool('progress', progress)
     if client is None:
         processes = _check_processes(processes)
     else:
@@ -237,13 +238,6 @@ def identify_many(datasets, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
 # ----------------------------------------------------------------------
 # Arguments and data, read in the calling process
 # ----------------------------------------------------------------------
-def _check_errors(errors):
-    if not isinstance(errors, str) or errors not in ERRORS:
-        raise ValueError(f"errors must be 'raise' or 'return'; got "
-                         f"{errors!r}")
-    return errors
-
-
 def _check_processes(processes):
     if processes is None:
         return os.cpu_count() or 1
@@ -256,7 +250,7 @@ def _check_orders(na, nb, nc, nd, q1, q2):
     if missing:
         raise TypeError(f"identify_many needs the orders {missing} (e.g. "
                         f"identify_many(datasets, na=2, nb=0, nc=2, nd=1))")
-    return {k: check_int(k, v) for k, v in values.items()}
+    return {k: check_order(k, v) for k, v in values.items()}
 
 
 def _import_distributed(client):
@@ -350,8 +344,8 @@ def _environment(values):
 
 
 def _bar(total, progress):
-    return tqdm(total=total, desc='identify_many', unit='set',
-                disable=not progress)
+    return progress_bar(progress, total=total, desc='identify_many',
+                        unit='set')
 
 
 def _run_serial(jobs, orders, options, progress):
