@@ -21,7 +21,8 @@ kinks of the cost (see `refine`).
 
 import numpy as np
 
-from ._predictor import simulate_with_sensitivities, oe_output, is_stable
+from ._predictor import (simulate_with_sensitivities, oe_output, is_stable,
+                         init_sizes)
 from ._qp import box_qp, QPError
 
 __all__ = []
@@ -59,7 +60,7 @@ class Structure:
     """
 
     def __init__(self, na, nb, nc, nd, q1, q2, i1=0, i2=0,
-                 zero_radius=ZERO_RADIUS, n_offsets=0):
+                 zero_radius=ZERO_RADIUS, n_offsets=0, n_inits=0):
         if not (0 <= i1 <= na and 0 <= i2 <= nc):
             raise ValueError(f"integrators ({i1}, {i2}) exceed the orders "
                              f"na = {na}, nc = {nc}")
@@ -71,8 +72,11 @@ class Structure:
         self.im = self.nc_free + self.na_free      # m1 in phi
         self.im_theta = nc + na                    # m1 in theta
         self.zero_radius = zero_radius
-        self.n_off = n_offsets                     # output offsets, last
-        self.size = self.q + n_offsets
+        self.n_off = n_offsets                     # output offsets, next
+        self.init_sizes = init_sizes(self.o)
+        self.n_init = sum(self.init_sizes)         # per experiment
+        self.n_inits = n_inits                     # experiments, last
+        self.size = self.q + n_offsets + n_inits * self.n_init
         self.t0 = self._affine(np.zeros(self.q))
         self.T = np.column_stack([self._affine(e) - self.t0
                                   for e in np.eye(self.q)]) if self.q else \
@@ -89,8 +93,19 @@ class Structure:
         return self.t0 + self.T @ phi[:self.q]
 
     def extend(self, phi):
-        """A model's reduced vector with zero output offsets appended."""
-        return np.concatenate([phi[:self.q], np.zeros(self.n_off)])
+        """A model's reduced vector with zero output offsets and initial
+        conditions appended."""
+        return np.concatenate([phi[:self.q],
+                               np.zeros(self.size - self.q)])
+
+    def init(self, phi, e):
+        """(x_past, v_past, y_past) of experiment e, or None."""
+        if not self.n_inits:
+            return None
+        start = self.q + self.n_off + e * self.n_init
+        kx, kv, ky = self.init_sizes
+        vals = phi[start:start + self.n_init]
+        return vals[:kx], vals[kx:kx + kv], vals[kx + kv:]
 
     def phi(self, theta):
         """Reduced vector of a theta whose denominators hold the
@@ -145,6 +160,25 @@ class Structure:
         phi[im + 2:im + 4] = np.maximum(phi[im + 2:im + 4], 0.0)
         return phi
 
+    def _init_jacobian(self, phi, e, u, yhat, theta, sp, ymeas):
+        """Columns for every experiment's initial conditions: those of
+        experiment e by forward differences, the others zero."""
+        out = np.zeros((u.size, self.n_inits * self.n_init))
+        start = self.q + self.n_off + e * self.n_init
+        for j in range(self.n_init):
+            step = 1e-6 * max(1.0, abs(phi[start + j]))
+            trial = phi.copy()
+            trial[start + j] += step
+            init = self.init(trial, e)
+            with np.errstate(all='ignore'):
+                if sp:
+                    moved = simulate_with_sensitivities(theta, self.o, u,
+                                                        ymeas, init)[0]
+                else:
+                    moved = oe_output(theta, self.o, u, init)
+            out[:, e * self.n_init + j] = (moved - yhat) / step
+        return out
+
     def _offsets(self, phi, n_exp):
         if self.n_off not in (0, n_exp):
             raise ValueError(f"{self.n_off} offsets for {n_exp} experiments")
@@ -160,8 +194,9 @@ class Structure:
             theta = self.theta(phi)
             off = self._offsets(phi, len(u))
             with np.errstate(all='ignore'):
-                r = np.concatenate([yy - oe_output(theta, self.o, uu) - c
-                                    for uu, yy, c in zip(u, y, off)])
+                r = np.concatenate([
+                    yy - oe_output(theta, self.o, uu, self.init(phi, e)) - c
+                    for e, (uu, yy, c) in enumerate(zip(u, y, off))])
         with np.errstate(all='ignore'):
             c = 0.5 * float(r @ r)
         return c if np.isfinite(c) else np.inf
@@ -174,14 +209,20 @@ class Structure:
         off = self._offsets(phi, len(u))
         rs, Js, zs = [], [], []
         for e, (uu, yy) in enumerate(zip(u, y)):
+            init = self.init(phi, e)
             with np.errstate(all='ignore'):
                 yhat, J, zones = simulate_with_sensitivities(
-                    theta, self.o, uu, yy - off[e] if sp else None)
+                    theta, self.o, uu, yy - off[e] if sp else None, init)
                 J = J @ self.T
+            cols = [J]
             if self.n_off:
                 ind = np.zeros((uu.size, self.n_off))
                 ind[:, e] = 1.0
-                J = np.hstack([J, ind])
+                cols.append(ind)
+            if self.n_inits:
+                cols.append(self._init_jacobian(phi, e, uu, yhat, theta,
+                                                sp, yy - off[e]))
+            J = np.hstack(cols) if len(cols) > 1 else J
             rs.append(yy - yhat - off[e])
             Js.append(J)
             zs.append(zones)

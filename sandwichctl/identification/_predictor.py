@@ -297,8 +297,33 @@ def _oe_output_padded(theta, o, u, pad, xs, vs, ys):
         ys[k] = l2_output(theta, o, vs, ys, k)
 
 
-def oe_output(theta, o, u):
-    """Simulated output y_hat (no sensitivities), from zero state.
+def init_sizes(o):
+    """How many past values of x, v and y make an initial condition.
+
+    x(-1..-max(na, 1)) (x(-1) is also the backlash memory's input),
+    v(-1..-max(q2 + nd, 1)) (v(-1) is the memory) and y(-1..-nc); the
+    input before the record is taken as zero.
+    """
+    na, nb, nc, nd, q1, q2 = o
+    return max(na, 1), max(q2 + nd, 1), nc
+
+
+def _place_init(pad, init, xs, vs, ys, ymeas=None):
+    """Write past values (newest first) before sample 0 of padded arrays."""
+    if init is None:
+        return
+    x_past, v_past, y_past = init
+    for arr, past in ((xs, x_past), (vs, v_past), (ys, y_past)):
+        for i, value in enumerate(past):
+            arr[pad - 1 - i] = value
+    if ymeas is not None:
+        for i, value in enumerate(y_past):
+            ymeas[pad - 1 - i] = value
+
+
+def oe_output(theta, o, u, init=None):
+    """Simulated output y_hat (no sensitivities), from zero state or from
+    the past values `init` = (x_past, v_past, y_past) (see `init_sizes`).
 
     The same recursion as `oe_steps` without the derivatives: the cheap
     cost evaluation of a trial step.
@@ -308,17 +333,19 @@ def oe_output(theta, o, u):
     up = np.zeros(pad + n)
     up[pad:] = u
     xs, vs, ys = np.zeros(pad + n), np.zeros(pad + n), np.zeros(pad + n)
+    _place_init(pad, init, xs, vs, ys)
     _oe_output_padded(np.ascontiguousarray(theta, dtype=float), o, up, pad,
                       xs, vs, ys)
     return ys[pad:]
 
 
-def simulate_with_sensitivities(theta, o, u, ymeas=None):
+def simulate_with_sensitivities(theta, o, u, ymeas=None, init=None):
     """Simulated output y_hat and Jacobian d y_hat / d theta (N x p).
 
-    Zero initial conditions, like the estimators. Returns (y_hat, J,
-    zones). With `ymeas` (the measured output), L2's past outputs are
-    measured ones: the series-parallel predictor and its Jacobian.
+    Zero initial conditions (or the past values `init`, see `oe_output`),
+    like the estimators. Returns (y_hat, J, zones). With `ymeas` (the
+    measured output), L2's past outputs are measured ones: the
+    series-parallel predictor and its Jacobian.
     """
     pad = padding(o)
     n = u.size
@@ -330,9 +357,11 @@ def simulate_with_sensitivities(theta, o, u, ymeas=None):
     Sx, Sv, Sy = (np.zeros((pad + n, p)) for _ in range(3))
     theta = np.ascontiguousarray(theta, dtype=float)
     if ymeas is None:
+        _place_init(pad, init, xs, vs, ys)
         oe_simulate(theta, o, up, pad, xs, vs, zs, ys, Sx, Sv, Sy)
     else:
         yp = np.zeros(pad + n)
         yp[pad:] = ymeas
+        _place_init(pad, init, xs, vs, ys, yp)
         sp_simulate(theta, o, up, yp, pad, xs, vs, zs, ys, Sx, Sv, Sy)
     return ys[pad:], Sy[pad:], zs[pad:]

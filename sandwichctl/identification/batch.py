@@ -78,14 +78,15 @@ class Problem:
     """
 
     def __init__(self, u, y, orders, i1=0, i2=0, sign=1, dt=True,
-                 name=None, offsets=False):
+                 name=None, offsets=False, inits=False):
         us = list(u) if isinstance(u, list) else [u]
         ys = list(y) if isinstance(y, list) else [y]
         self.orders = {k: orders[k] for k in ('na', 'nb', 'nc', 'nd', 'q1',
                                                'q2')}
         self.st = Structure(*(self.orders[k] for k in
                               ('na', 'nb', 'nc', 'nd', 'q1', 'q2')), i1, i2,
-                            n_offsets=len(us) if offsets else 0)
+                            n_offsets=len(us) if offsets else 0,
+                            n_inits=len(us) if inits else 0)
         self.sign = 1 if sign >= 0 else -1
         self.su = _scale(np.concatenate(us))
         self.sy = _scale(np.concatenate(ys))
@@ -172,8 +173,14 @@ class Problem:
             n_experiments=len(self.u))
         if self.st.n_off:
             res.offsets = {'method': 'estimate', 'u': [0.0] * len(self.u),
-                           'y': list(self.sign * self.sy
-                                     * phi[self.st.q:])}
+                           'y': list(self.sign * self.sy * phi[
+                               self.st.q:self.st.q + self.st.n_off])}
+        if self.st.n_inits:
+            res.initial_conditions = [
+                {'x_past': self.su * x, 'v_past': self.sy * v,
+                 'y_past': self.sign * self.sy * yy}
+                for x, v, yy in (self.st.init(phi, e)
+                                 for e in range(self.st.n_inits))]
         if extra:
             res.update(extra)
         return res

@@ -39,7 +39,7 @@ from .batch import Problem, refine as _refine, _progress_range, \
 from .linear import _fit_oe, oe_transfer_function
 from .recursive import RecursiveIdentifier, DEFAULTS
 from .._checks import (check_int, check_order, check_positive, warn,
-                       progress_bar,
+                       progress_bar, check_option,
                        ExcitationWarning, SimulationWarning,
                        SandwichWarning, IdentificationWarning)
 
@@ -53,7 +53,7 @@ OE_DEFAULTS = dict(widths=(0.05, 0.25), screen_iter=8, keep=3, max_iter=200,
 def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
              method='oe', theta0=None, dt=True, refine=None, progress=False,
              integrators='auto', integrator_block='L1', name=None,
-             offsets='none', **options):
+             offsets='none', initial_state='zero', **options):
     r"""Identify a sandwich system from input/output data.
 
     Parameters
@@ -107,6 +107,14 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         the data as given (also the initial position of an integrating
         plant). The recursive methods take 'none' or 'mean'.
         ``res.offsets`` says what was done.
+    initial_state : {'zero', 'estimate'}, optional
+        ``'oe'`` only. ``'zero'`` (default): each experiment starts from
+        rest. ``'estimate'``: the past values before each experiment's
+        first sample (x and v, which include the backlash memory, and y:
+        the states of L1, the backlash and L2) are estimated with the
+        model; they matter for short records and slow or integrating
+        plants. ``res.initial_conditions`` gives them per experiment; the
+        returned model's own `simulate` starts from rest.
     **options
         ``'oe'``: widths (relative backlash widths the starts open to,
         default (0.05, 0.25)), screen_iter (8), keep (3), max_iter (200),
@@ -186,7 +194,10 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
             raise ValueError("theta0 applies to the recursive methods; "
                              "method='oe' starts from the linear fit")
         result = _identify_oe(us, ys, orders, dt, name, integrators,
-                              integrator_block, progress, options, estimate)
+                              integrator_block, progress, options, estimate,
+                              check_option('initial_state', initial_state,
+                                           ('zero', 'estimate'))
+                              == 'estimate')
     else:
         if len(us) > 1:
             raise ValueError(f"method={method!r} is recursive and takes one "
@@ -254,7 +265,7 @@ def _l1_std(st, phi, u):
 
 
 def _identify_oe(u, y, orders, dt, name, integrators, block, progress,
-                 options, offsets):
+                 options, offsets, inits):
     opt = _oe_options(options)
     start = time.perf_counter()
     if not (integrators == 'auto' or (isinstance(integrators,
@@ -285,7 +296,7 @@ def _identify_oe(u, y, orders, dt, name, integrators, block, progress,
                                         integrators, opt['max_iter'],
                                         opt['tol'], offsets)}
     fits = {k: _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt,
-                             name, progress, offsets)
+                             name, progress, offsets, inits)
             for k, lin in linears.items()}
     # several integrator counts: the lower AIC of the sandwich fits
     n = sum(part.size for part in u)
@@ -309,13 +320,14 @@ def _identify_oe(u, y, orders, dt, name, integrators, block, progress,
 
 
 def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
-                  progress, offsets):
+                  progress, offsets, inits):
     """The sandwich of `orders` with k integrators, from the linear fit
     `lin` (on data scaled like `Problem`'s): (problem, best lm, linear)."""
     nb_l, nf_l, nk_l = shape
     i1, i2 = _integrator_split(k, orders, block)
     sign = -1 if lin['B'][0] < 0 else 1
-    probs = {sign: Problem(u, y, orders, i1, i2, sign, dt, name, offsets)}
+    probs = {sign: Problem(u, y, orders, i1, i2, sign, dt, name, offsets,
+                           inits)}
     prob = probs[sign]
     y_all = np.concatenate(y)
     r_lin = y_all - lin['yhat'] * prob.sy
@@ -329,9 +341,12 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
         'converged': lin['converged'], 'message': lin['message']}
     # exact sandwich starts of the linear fit, closed and opened
     def extend(s, phi):
-        """A model start with the linear fit's output offsets."""
-        return np.concatenate([phi[:probs[s].st.q],
-                               s * lin['offsets'][:probs[s].st.n_off]])
+        """A model start with the linear fit's output offsets (and zero
+        initial conditions)."""
+        st = probs[s].st
+        phi = st.extend(phi)
+        phi[st.q:st.q + st.n_off] = s * lin['offsets'][:st.n_off]
+        return phi
 
     starts = [(sign, extend(sign, phi))
               for phi in splits(prob.st, sign * lin['B'], lin['F'])]
@@ -340,7 +355,7 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
         # the sign of a small leading coefficient is uncertain: also try
         # the other sign, from the linear fit with that coefficient flipped
         probs[-sign] = Problem(u, y, orders, i1, i2, -sign, dt, name,
-                               offsets)
+                               offsets, inits)
         flipped = B.copy()
         flipped[0] = -B[0]
         starts += [(-sign, extend(-sign, phi)) for phi in
