@@ -1,5 +1,7 @@
 """Tests of SandwichSystem: eqs. (2.1)-(2.5), the fast kernel, python-control."""
 
+import copy
+
 import numpy as np
 import control as ct
 import pytest
@@ -375,3 +377,39 @@ def test_from_coefficients_keeps_orders_without_extra_states():
     u = sw.examples.paper_input(200, seed=2)
     np.testing.assert_array_equal(plant.simulate(u).outputs,
                                   ref.simulate(u).outputs)
+
+
+def test_simulate_paths_agree_bit_for_bit(rng):
+    """Register kernel, array kernel and the generic fallback agree."""
+    for a, d in (([0.1, 0.2], [2, -0.1]),                 # orders <= 2
+                 ([0.1, 0.2, 0.1], [2, -0.1, 0.3]),       # orders <= 4
+                 ([0.1, 0.2, 0.1, 0.05, 0.02], [2, -0.1, 0.3, 0.1, 0.2, 0.1])):
+        plant = sw.SandwichSystem.from_coefficients(
+            a=a, b=[1.5], c=[1.2, 0.32], d=d, m1=1, m2=1.2, D1=0.5, D2=0.6)
+        u = rng.normal(0, 1, 500)
+        x0 = rng.normal(0, 1, plant.nstates)
+        fast = plant.simulate(u, initial_state=x0, internal=True)
+        full = plant.simulate(u, initial_state=x0, internal=True,
+                              return_states=True)
+        np.testing.assert_array_equal(fast.outputs, full.outputs)
+        np.testing.assert_array_equal(fast.final_state, full.final_state)
+        generic = copy.deepcopy(plant)
+        generic._companion = None         # force the matrix kernel
+        slow = generic.simulate(u, initial_state=x0, internal=True,
+                                return_states=True)
+        np.testing.assert_allclose(slow.outputs, fast.outputs, rtol=0,
+                                   atol=1e-12)
+        np.testing.assert_allclose(slow.states, full.states, rtol=0,
+                                   atol=1e-12)
+        np.testing.assert_allclose(generic.simulate_batch(u[None], None, x0),
+                                   fast.outputs[:1], rtol=0, atol=1e-12)
+
+
+def test_simulate_response_owns_its_arrays():
+    plant = sw.examples.paper_plant(dt=0.5)
+    u = np.ones(5)
+    resp = plant.simulate(u)
+    u[:] = 7.0
+    np.testing.assert_array_equal(resp.inputs, np.ones(5))
+    np.testing.assert_array_equal(resp.time, 0.5 * np.arange(5))
+    assert resp.outputs.shape == (5,)

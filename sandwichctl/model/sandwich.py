@@ -29,7 +29,8 @@ import numpy as np
 import control as ct
 
 from .backlash import Backlash
-from ._kernel import simulate_kernel
+from ._kernel import (simulate_kernel, companion_kernel, batch_kernel,
+                      companion_form, batch_signals, theta_batch)
 from .._checks import (check_discrete_siso_tf, check_order, check_signal,
                        check_vector, common_dt, check_name, check_label,
                        check_bool, check_dt, check_option, check_timepts,
@@ -411,27 +412,115 @@ class SandwichSystem(ct.InterconnectedSystem):
         internal = check_bool('internal', internal)
         return_states = check_bool('return_states', return_states)
         n = u.size
+        step = 1.0 if self.dt is True else float(self.dt)
         if timepts is not None:
             timepts = check_timepts('timepts', timepts, n, self.dt)
         y = np.empty(n)
         x, v = (np.empty(n), np.empty(n)) if internal else (y[:0], y[:0])
         states = np.empty((n if return_states else 0, self.nstates))
-        simulate_kernel(u, *self._matrices, *self._backlash_values, state, y,
-                        x, v, states)
-        if timepts is None:
-            step = 1.0 if self.dt is True else float(self.dt)
-            timepts = step * np.arange(n)
-        _warn_divergence(self.name, y, state, timepts)
-        outputs = np.vstack([y, x, v]) if internal else y
+        comp = self.__dict__.get('_companion', False)
+        if comp is False:                 # first call: read the form once
+            comp = self._companion = companion_form(*self._matrices)
+        if comp is not None:
+            # the kernel also fills the time points and the copy of u
+            t = np.empty(n if timepts is None else 0)
+            u_copy = np.empty(n)
+            bad = companion_kernel(u, *comp, *self._backlash_values, state,
+                                   y, x, v, states, step, t, u_copy)
+            timepts = t if timepts is None else timepts
+        else:                             # another realisation
+            simulate_kernel(u, *self._matrices, *self._backlash_values,
+                            state, y, x, v, states)
+            timepts = step * np.arange(n) if timepts is None else timepts
+            u_copy = u.copy()
+            bad = 0 if not np.all(np.isfinite(y)) else -1
+        if bad >= 0 or not np.all(np.isfinite(state)):
+            _warn_divergence(self.name, y, state, timepts)
+        outputs = np.vstack([y, x, v]) if internal else y.reshape(1, n)
         labels = ['y', 'x', 'v'] if internal else self.output_labels
+        # built on the first sample, then given the whole arrays: this
+        # saves TimeResponseData's copies of arrays made here
         resp = ct.TimeResponseData(
-            timepts, outputs, states.T if return_states else None, u,
+            timepts[:1], outputs[:, :1],
+            states[:1].T if return_states else None, u_copy[:1],
             issiso=not internal, output_labels=labels,
             input_labels=self.input_labels,
             state_labels=self.state_labels if return_states else None,
             sysname=self.name, title=f"Simulation of {self.name}")
+        resp.t, resp.y, resp.u = timepts, outputs, u_copy.reshape(1, n)
+        if return_states:
+            resp.x = states.T
         resp.final_state = state
         return resp
+
+    def simulate_batch(self, inputs, thetas=None, initial_state=None):
+        """Simulate many input signals and/or parameter sets at once.
+
+        One compiled call, parallel over the rows with numba's threads
+        (``numba.set_num_threads``); each row is exactly the output of one
+        `simulate` call, whatever the number of threads.
+
+        Parameters
+        ----------
+        inputs : array_like, shape (B, N) or (N,)
+            One input signal per row; a 1-D array is one signal.
+        thetas : array_like, shape (P, len(theta)) or (len(theta),), optional
+            Parameter vectors of eq. (2.5) in this system's `theta_labels`
+            order, one per row: a row stands for ``SandwichSystem.from_theta(
+            row, **self.orders, dt=self.dt, sign=self.gain_sign)``. Default:
+            this system itself.
+        initial_state : array_like, optional
+            Full state at k = 0 of every run, as for `simulate` (default
+            zeros); not accepted with `thetas`.
+
+        Returns
+        -------
+        numpy.ndarray, shape (max(B, P), N)
+            Row b is the output y for signal b and parameter set b. A
+            single signal (B = 1) is shared by every parameter set, and a
+            single parameter set by every signal; otherwise B must equal P.
+
+        Examples
+        --------
+        >>> import numpy as np, sandwichctl as sw
+        >>> plant = sw.examples.paper_plant()
+        >>> u = np.ones((3, 4)) * [[1.0], [2.0], [0.2]]
+        >>> plant.simulate_batch(u)[1]
+        array([ 0.  ,  0.  ,  5.  , -1.25])
+        >>> thetas = [plant.theta, plant.theta * 1.1]
+        >>> plant.simulate_batch(np.ones(4), thetas).shape
+        (2, 4)
+        """
+        U = batch_signals(inputs)
+        if thetas is None:
+            params = self.__dict__.get('_companion', False)
+            if params is False:
+                params = self._companion = companion_form(*self._matrices)
+            state = self._initial_state(initial_state)
+            if params is None:            # not a companion realisation
+                return np.stack([self.simulate(r, state).outputs for r in U])
+            params = tuple(np.array([p]) for p in params) + (
+                np.array([self._backlash_values]),)
+        else:
+            if not (initial_state is None or np.ndim(initial_state) == 0
+                    and initial_state == 0):
+                raise ValueError("initial_state is not accepted with thetas "
+                                 "(the runs start at rest)")
+            params = theta_batch(thetas, self.orders, self.gain_sign)
+            state = np.zeros(params[0].shape[1] + 2 + params[3].shape[1])
+        S, P = U.shape[0], params[0].shape[0]
+        if S > 1 and P > 1 and S != P:
+            raise ValueError(f"inputs has {S} signals but thetas {P} "
+                             f"parameter sets; give one of either or as "
+                             f"many of both")
+        Y = np.empty((max(S, P), U.shape[1]))
+        batch_kernel(U, *params, state, Y)
+        if not np.all(np.isfinite(Y)):
+            rows = np.flatnonzero(~np.all(np.isfinite(Y), axis=1))
+            warn(f"the batch simulation of {self.name} diverged in rows "
+                 f"{rows[:10].tolist()}: a system is unstable or an input "
+                 f"too large for it", SimulationWarning)
+        return Y
 
     def _initial_state(self, initial_state):
         if initial_state is None or (
