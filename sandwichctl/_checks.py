@@ -12,6 +12,7 @@ users can filter them; `warn` issues one with the stack level of the
 user's own line.
 """
 
+import functools
 import numbers
 import os
 import sys
@@ -19,6 +20,7 @@ import warnings
 
 import numpy as np
 import control as ct
+from threadpoolctl import threadpool_limits
 
 __all__ = ['SandwichWarning', 'IdentificationWarning', 'ExcitationWarning',
            'SimulationWarning']
@@ -442,3 +444,18 @@ def progress_bar(enabled, **kwargs):
         return tqdm(**kwargs)
     from tqdm import tqdm
     return tqdm(disable=True, **kwargs)
+
+
+def serial_blas(func):
+    """Decorator: run `func` with the BLAS library on one thread.
+
+    The identifiers multiply small matrices (N x p with p ~ 10) thousands
+    of times; a multi-threaded BLAS gains nothing on them and, on a busy
+    machine, loses several times over to thread hand-offs. threadpoolctl
+    sets the limit for the call and restores it after.
+    """
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        with threadpool_limits(limits=1, user_api='blas'):
+            return func(*args, **kwargs)
+    return wrapper

@@ -14,6 +14,8 @@ import itertools
 import numpy as np
 
 from ._oe import integrator_poly
+from ._predictor import oe_signals
+from .linear import _fit_oe
 
 __all__ = []
 
@@ -167,3 +169,53 @@ def _assignments(st, zeros, gain, F):
         if phi.size == st.q and np.all(np.isfinite(phi)):
             out.append(phi)
     return out
+
+
+def refit_l2(st, phi, u, y, max_iter=100, tol=1e-10):
+    """A start with L2 re-fitted to the model's own intermediate signal.
+
+    With L1 and the backlash held, y is a linear output-error model of
+    the backlash output v; the linear OE fit (ARX, Steiglitz-McBride,
+    Levenberg-Marquardt) finds its optimum far more reliably than the
+    joint descent, which can stall with L2's zeros or poles in the wrong
+    place. Its gain moves into the backlash slopes (d0 = 1 stays).
+
+    Parameters
+    ----------
+    st : Structure
+    phi : ndarray
+        The current reduced vector (output offsets and initial conditions
+        included, as `st` lays them out).
+    u, y : list of ndarray
+        The scaled experiments.
+
+    Returns
+    -------
+    ndarray or None
+        The new phi, or None when the fit gives no admissible start (a
+        leading coefficient of the wrong sign, unstable, not finite).
+    """
+    theta = st.theta(phi)
+    vs = [oe_signals(theta, st.o, uu, st.init(phi, e))[2]
+          for e, uu in enumerate(u)]
+    with np.errstate(all='ignore'):
+        sv = float(np.std(np.concatenate(vs)))
+    if not (np.isfinite(sv) and sv > 0):
+        return None
+    na, nb, nc, nd = st.o[:4]
+    fit = _fit_oe([v / sv for v in vs], list(y), nd + 1, nc, st.o[5], st.i2,
+                  max_iter, tol, offsets=bool(st.n_off))
+    B, F = fit['B'], fit['F']
+    if not (np.all(np.isfinite(B)) and np.all(np.isfinite(F))
+            and B[0] > 1e-9 * np.max(np.abs(B))):
+        return None
+    new = theta.copy()
+    new[:nc] = F[1:]
+    im = nc + na
+    new[im:im + 2] *= B[0] / sv
+    new[im + 4 + nb:] = B[1:] / B[0]
+    out = st.phi(new)
+    out[st.q:] = phi[st.q:]
+    if st.n_off:
+        out[st.q:st.q + st.n_off] = fit['offsets'][:st.n_off]
+    return out if st.stable(out) else None

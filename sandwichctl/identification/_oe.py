@@ -21,8 +21,8 @@ kinks of the cost (see `refine`).
 
 import numpy as np
 
-from ._predictor import (simulate_with_sensitivities, oe_output, is_stable,
-                         init_sizes)
+from ._predictor import (simulate_with_sensitivities, oe_output, sp_output,
+                         is_stable, init_sizes)
 from ._qp import box_qp, QPError
 
 __all__ = []
@@ -188,12 +188,15 @@ class Structure:
         """Output-error cost 0.5 * sum(r^2) over the experiments (lists u
         and y; inf if not finite); with ``sp`` the series-parallel
         prediction error instead."""
-        if sp:
-            r = self.jacobian(phi, u, y, sp)[0]
-        else:
-            theta = self.theta(phi)
-            off = self._offsets(phi, len(u))
-            with np.errstate(all='ignore'):
+        theta = self.theta(phi)
+        off = self._offsets(phi, len(u))
+        with np.errstate(all='ignore'):
+            if sp:
+                r = np.concatenate([
+                    yy - c - sp_output(theta, self.o, uu, yy - c,
+                                       self.init(phi, e))
+                    for e, (uu, yy, c) in enumerate(zip(u, y, off))])
+            else:
                 r = np.concatenate([
                     yy - oe_output(theta, self.o, uu, self.init(phi, e)) - c
                     for e, (uu, yy, c) in enumerate(zip(u, y, off))])

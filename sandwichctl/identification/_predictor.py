@@ -286,7 +286,10 @@ def sp_simulate(theta, o, u, ymeas, pad, xs, vs, zs, ys, Sx, Sv, Sy):
 
 
 @numba.njit(cache=True)
-def _oe_output_padded(theta, o, u, pad, xs, vs, ys):
+def _output_padded(theta, o, u, past, pad, xs, vs, ys):
+    """The recursion without derivatives; L2's past outputs are read from
+    `past`: ys itself (output error) or the measured ones
+    (series-parallel)."""
     im = _idx(o)[1]
     m1, m2, D1, D2 = theta[im], theta[im + 1], theta[im + 2], theta[im + 3]
     for k in range(pad, u.size):
@@ -294,7 +297,7 @@ def _oe_output_padded(theta, o, u, pad, xs, vs, ys):
         xs[k] = x
         v, _ = backlash_step(x, xs[k - 1], vs[k - 1], m1, m2, D1, D2)
         vs[k] = v
-        ys[k] = l2_output(theta, o, vs, ys, k)
+        ys[k] = l2_output(theta, o, vs, past, k)
 
 
 def init_sizes(o):
@@ -328,15 +331,32 @@ def oe_output(theta, o, u, init=None):
     The same recursion as `oe_steps` without the derivatives: the cheap
     cost evaluation of a trial step.
     """
+    return oe_signals(theta, o, u, init)[0]
+
+
+def sp_output(theta, o, u, ymeas, init=None):
+    """The series-parallel prediction (L2's past outputs measured), no
+    sensitivities: the cheap cost of a trial step of that predictor."""
+    return oe_signals(theta, o, u, init, ymeas)[0]
+
+
+def oe_signals(theta, o, u, init=None, ymeas=None):
+    """`oe_output`'s y_hat with the intermediate signals: (y, x, v); with
+    `ymeas`, the series-parallel prediction's."""
     pad = padding(o)
     n = u.size
     up = np.zeros(pad + n)
     up[pad:] = u
     xs, vs, ys = np.zeros(pad + n), np.zeros(pad + n), np.zeros(pad + n)
-    _place_init(pad, init, xs, vs, ys)
-    _oe_output_padded(np.ascontiguousarray(theta, dtype=float), o, up, pad,
-                      xs, vs, ys)
-    return ys[pad:]
+    if ymeas is None:
+        past = ys
+    else:
+        past = np.zeros(pad + n)
+        past[pad:] = ymeas
+    _place_init(pad, init, xs, vs, ys, None if ymeas is None else past)
+    _output_padded(np.ascontiguousarray(theta, dtype=float), o, up, past,
+                   pad, xs, vs, ys)
+    return ys[pad:], xs[pad:], vs[pad:]
 
 
 def simulate_with_sensitivities(theta, o, u, ymeas=None, init=None):

@@ -51,6 +51,7 @@ from .result import IdentificationResult, backlash_significance, whiteness
 from ..model.sandwich import SandwichSystem
 from ._data import prepare, scale as _scale
 from .._checks import (check_int, check_positive, warn, progress_bar,
+                       serial_blas,
                        IdentificationWarning)
 
 __all__ = ['refine']
@@ -219,6 +220,7 @@ def _admissible_start(st, phi, m_min):
     return phi
 
 
+@serial_blas
 def refine(model, u, y=None, max_iter=100, tol=1e-10, n_starts=1,
            spread=0.3, seed=None, m_min=1e-9, progress=False,
            offsets='none'):

@@ -39,7 +39,7 @@ from scipy.optimize import OptimizeResult
 from scipy.signal import lfilter
 
 from ._data import prepare, scale
-from .._checks import check_int, check_positive, check_dt
+from .._checks import check_int, check_positive, check_dt, serial_blas
 
 __all__ = ['identify_linear', 'LinearIdentificationResult']
 
@@ -444,6 +444,7 @@ def _check_orders(n, nb, nf, nk, integrators):
     return nb, nf, nk, integrators
 
 
+@serial_blas
 def identify_linear(u, y=None, nb=None, nf=None, nk=1, dt=True,
                     integrators=0, max_iter=100, tol=1e-10, name=None,
                     offsets='none'):

@@ -31,7 +31,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from ._data import prepare
-from ._nested import splits
+from ._nested import splits, refit_l2
 from ._oe import lm
 from ._predictor import padding, stable_and_finite
 from .batch import Problem, refine as _refine, _progress_range, \
@@ -39,6 +39,7 @@ from .batch import Problem, refine as _refine, _progress_range, \
 from .linear import _fit_oe, oe_transfer_function
 from .recursive import RecursiveIdentifier, DEFAULTS
 from .._checks import (check_int, check_order, check_positive, warn,
+                       serial_blas,
                        progress_bar, check_option,
                        ExcitationWarning, SimulationWarning,
                        SandwichWarning, IdentificationWarning)
@@ -48,8 +49,9 @@ __all__ = ['identify']
 #: Options of method='oe' and their defaults.
 OE_DEFAULTS = dict(widths=(0.05, 0.25), screen_iter=8, keep=3, max_iter=200,
                    tol=1e-10, min_fit=MIN_FIT, sp_iter=15, sp_starts=4,
-                   n_random=6, seed=0)
+                   n_random=6, seed=0, refits=2, max_splits=16)
 
+@serial_blas
 def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
              method='oe', theta0=None, dt=True, refine=None, progress=False,
              integrators='auto', integrator_block='L1', name=None,
@@ -118,7 +120,10 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     **options
         ``'oe'``: widths (relative backlash widths the starts open to,
         default (0.05, 0.25)), screen_iter (8), keep (3), max_iter (200),
-        tol (1e-10), min_fit (5, percent). Recursive methods: see
+        tol (1e-10), min_fit (5, percent), max_splits (16: most pole/zero
+        splits of the linear fit screened), sp_iter (15), sp_starts (4),
+        n_random (6), seed (0), refits (2: L2 re-fits per refined
+        start); `docs/algorithm.md` explains them. Recursive methods: see
         `RecursiveIdentifier`.
 
     Returns
@@ -230,6 +235,8 @@ def _oe_options(options):
     opt['n_random'] = check_int('n_random', opt['n_random'], 0)
     opt['seed'] = check_int('seed', opt['seed'], 0)
     opt['keep'] = check_int('keep', opt['keep'], 1)
+    opt['refits'] = check_int('refits', opt['refits'], 0)
+    opt['max_splits'] = check_int('max_splits', opt['max_splits'], 1)
     opt['max_iter'] = check_int('max_iter', opt['max_iter'], 1)
     opt['tol'] = check_positive('tol', opt['tol'])
     opt['min_fit'] = float(opt['min_fit'])
@@ -365,17 +372,25 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
             f"the linear fit of the total orders cannot be split into "
             f"L1 (na = {orders['na']}, nb = {orders['nb']}) and L2 (nc = "
             f"{orders['nc']}, nd = {orders['nd']})")
-    # stage 1: the linear fit's splits, closed and opened, briefly
-    cands, widest = [], []
+    # stage 1: the linear fit's splits, closed and opened, briefly; when
+    # there are many, those whose widest opening fits best (one simulation
+    # each; closed, they all have the linear fit's cost)
+    groups = []
     for s, phi in starts:
         p = probs[s]
-        cands.append((s, phi))
+        group = [(s, phi)]
         width = _l1_std(p.st, phi, p.u)
         for w in opt['widths']:
             opened = phi.copy()
             opened[p.st.im + 2:p.st.im + 4] = w * width
-            cands.append((s, opened))
-        widest.append(cands[-1])
+            group.append((s, opened))
+        groups.append(group)
+    if len(groups) > opt['max_splits']:
+        groups.sort(key=lambda g: probs[g[-1][0]].st.cost(
+            g[-1][1], probs[g[-1][0]].u, probs[g[-1][0]].y))
+        groups = groups[:opt['max_splits']]
+    cands = [c for g in groups for c in g]
+    widest = [g[-1] for g in groups]
     bar = _progress(progress, len(cands) + len(widest) + opt['sp_starts']
                     + opt['n_random'] + 1 + opt['keep'])
     screened = _screen(cands, probs, opt['screen_iter'] // 2, opt, bar)
@@ -403,12 +418,24 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
     screened = sorted(screened[:opt['keep']]
                       + _screen(others, probs, opt['screen_iter'], opt, None),
                       key=lambda out: out['cost'])
-    # stage 3: the best to convergence
+    # stage 3: the best to convergence, each then with L2 re-fitted to the
+    # model's own backlash output (a linear OE problem, solved
+    # near-globally) and refined again while that helps
     best = None
     for out in screened[:opt['keep']]:
         p = probs[out['sign']]
         out = dict(lm(p.st, out['phi'], p.u, p.y, opt['max_iter'],
                       opt['tol']), sign=out['sign'])
+        for _ in range(opt['refits']):
+            phi = refit_l2(p.st, out['phi'], p.u, p.y, opt['max_iter'],
+                           opt['tol'])
+            if phi is None:
+                break
+            new = dict(lm(p.st, phi, p.u, p.y, opt['max_iter'],
+                          opt['tol']), sign=out['sign'])
+            if not new['cost'] < out['cost'] * (1 - 1e-9):
+                break
+            out = new
         if best is None or out['cost'] < best['cost']:
             best = out
         bar.update()

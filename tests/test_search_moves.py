@@ -1,0 +1,91 @@
+"""The search moves of `identify(method='oe')`: the L2 re-fit to the
+model's own backlash output, and the cheap series-parallel cost."""
+
+import numpy as np
+import pytest
+
+import sandwichctl as sw
+from sandwichctl.identification._nested import refit_l2
+from sandwichctl.identification._oe import Structure
+from sandwichctl.identification.batch import Problem
+
+
+def _perturbed_l2(st, phi, rng):
+    """phi with L2's free denominator and numerator moved well away (the
+    poles kept stable)."""
+    out = phi.copy()
+    nc = st.nc_free
+    while True:
+        trial = out.copy()
+        trial[:nc] = phi[:nc] * 0.5 + 0.1 * rng.standard_normal(nc)
+        ib = st.im + 4 + st.o[1]
+        trial[ib:st.q] += 0.3 * rng.standard_normal(st.q - ib)
+        if st.stable(trial):
+            return trial
+
+
+@pytest.mark.parametrize('offsets', [False, True])
+def test_refit_l2_recovers_l2_from_exact_intermediate_signal(offsets):
+    """Noise-free: with L1 and the backlash exact, the re-fit finds the
+    true L2 (and the output offset) from a wrong one."""
+    plant = sw.examples.paper_plant()
+    rng = np.random.default_rng(5)
+    u = sw.examples.paper_input(1500, seed=3)
+    y = plant.simulate(u).outputs + (0.7 if offsets else 0.0)
+    prob = Problem(u, y, plant.orders, offsets=offsets)
+    truth = prob.phi_of_model(plant)
+    if offsets:
+        truth[prob.st.q] = 0.7 / prob.sy
+    start = _perturbed_l2(prob.st, truth, rng)
+    assert prob.st.cost(start, prob.u, prob.y) > 1e-3
+    phi = refit_l2(prob.st, start, prob.u, prob.y)
+    assert phi is not None
+    np.testing.assert_allclose(phi, truth, atol=1e-6)
+
+
+def test_refit_l2_keeps_an_integrator_in_l2():
+    """An integrator declared in L2 stays at z = 1 and L2 is recovered."""
+    plant = sw.SandwichSystem.from_coefficients(
+        a=[-0.6], b=[1.0, 0.4], c=[-1.5, 0.5], d=[1.0, 0.3], m1=1.0,
+        m2=1.2, D1=0.1, D2=0.15, dt=1)
+    u = np.sin(0.02 * np.arange(1200)) + 0.3 * np.random.default_rng(
+        2).standard_normal(1200)
+    u -= u.mean()
+    y = plant.simulate(u).outputs
+    prob = Problem(u, y, plant.orders, i2=1)
+    truth = prob.phi_of_model(plant)
+    start = _perturbed_l2(prob.st, truth, np.random.default_rng(1))
+    phi = refit_l2(prob.st, start, prob.u, prob.y)
+    np.testing.assert_allclose(phi, truth, atol=1e-6)
+    theta = prob.st.theta(phi)
+    assert np.polyval(np.r_[1.0, theta[:2]], 1.0) == pytest.approx(
+        0.0, abs=1e-12)
+
+
+def test_refit_l2_declines_a_start_it_cannot_use():
+    """A model whose backlash output is identically zero gives no start."""
+    st = Structure(1, 0, 1, 0, 1, 1)
+    phi = np.array([-0.5, -0.5, 1.0, 1.0, 10.0, 10.0])
+    u = [0.01 * np.sin(0.1 * np.arange(300))]
+    y = [np.cos(0.1 * np.arange(300))]
+    assert refit_l2(st, phi, u, y) is None
+
+
+@pytest.mark.parametrize('orders', [(2, 1, 2, 1, 1, 1), (1, 0, 3, 2, 0, 2),
+                                    (3, 2, 1, 0, 2, 0)])
+@pytest.mark.parametrize('inits', [0, 2])
+def test_series_parallel_cost_equals_the_jacobian_residuals(orders, inits):
+    """The cheap series-parallel cost (no sensitivities) is the one whose
+    residuals the Jacobian path returns, offsets and initial conditions
+    included."""
+    rng = np.random.default_rng(0)
+    st = Structure(*orders, n_offsets=2, n_inits=inits)
+    u = [rng.standard_normal(400), rng.standard_normal(250)]
+    y = [rng.standard_normal(400), rng.standard_normal(250)]
+    phi = np.zeros(st.size)
+    phi[st.nc_free:st.im] = 0.3
+    phi[st.im:st.im + 4] = [1.0, 1.2, 0.1, 0.2]
+    phi[st.q:] = 0.1 * rng.standard_normal(st.size - st.q)
+    r = st.jacobian(phi, u, y, sp=True)[0]
+    assert st.cost(phi, u, y, sp=True) == pytest.approx(0.5 * r @ r,
+                                                        rel=1e-12)
