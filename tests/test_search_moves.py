@@ -89,3 +89,31 @@ def test_series_parallel_cost_equals_the_jacobian_residuals(orders, inits):
     r = st.jacobian(phi, u, y, sp=True)[0]
     assert st.cost(phi, u, y, sp=True) == pytest.approx(0.5 * r @ r,
                                                         rel=1e-12)
+
+
+def test_a_hop_never_raises_the_cost_and_is_seeded():
+    """A perturbed restart keeps the better model, and the same generator
+    state gives the same result."""
+    from sandwichctl.identification.pipeline import _hop, _oe_options
+    from sandwichctl.identification._oe import lm
+    plant = sw.examples.paper_plant()
+    u = sw.examples.paper_input(1200, seed=8)
+    y = sw.examples.add_noise(plant.simulate(u).outputs, 20, seed=9)
+    prob = Problem(u, y, plant.orders)
+    start = prob.phi_of_model(plant) * 1.3
+    best = dict(lm(prob.st, start, prob.u, prob.y, max_iter=3), sign=1)
+    opt = _oe_options({})
+    outs = [_hop(prob, best, opt, np.random.default_rng(4))
+            for _ in range(2)]
+    assert outs[0]['cost'] <= best['cost']
+    np.testing.assert_array_equal(outs[0]['phi'], outs[1]['phi'])
+
+
+@pytest.mark.parametrize('option, value', [('hops', -1), ('refits', 1.5),
+                                           ('max_splits', 0)])
+def test_search_options_are_checked(option, value):
+    plant = sw.examples.paper_plant()
+    u = sw.examples.paper_input(500, seed=1)
+    y = plant.simulate(u).outputs
+    with pytest.raises((TypeError, ValueError), match=option):
+        sw.identify(u, y, **plant.orders, **{option: value})

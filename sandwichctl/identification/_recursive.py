@@ -3,10 +3,13 @@
 The bundle method of Section 3 is split around its QP: `bundle_prepare`
 evaluates f(k, .) and the Clarke subgradients at the current estimate
 and the stored trial points (eqs. (3.2)-(3.3)) and the locality measures
-beta_j; the caller solves the dual of (3.4) with piqp; `bundle_finish`
-forms t and phi (eqs. (3.5)-(3.6)), runs the line search (3.8) with the
-step classification of Step 3, finds the trial point of (3.10) for short
-and null steps, and stores the new estimate's internal signals.
+beta_j; `direction_weights` solves the dual of (3.4) with piqp, called
+in object mode; `bundle_finish` forms t and phi (eqs. (3.5)-(3.6)), runs
+the line search (3.8) with the step classification of Step 3 and finds
+the trial point of (3.10) for short and null steps. `bundle_run` loops
+over a block of samples: it calls the three, keeps the bundle's trial
+points and their distances s_j, and stores the new estimate's internal
+signals, in one compiled call that leaves compiled code only for piqp.
 """
 
 import numba
@@ -14,6 +17,8 @@ import numpy as np
 
 from ._predictor import (window_predict, store_state, oe_steps,
                          stable_and_finite, _idx)
+from ._qp import simplex_solve, QPError
+from .._checks import warn, IdentificationWarning
 
 __all__ = []
 
@@ -184,6 +189,141 @@ def bundle_finish(theta, lam, H, beta, n, f0, e0, o, u, ystar, y, xs, vs,
             break
         eta_star = min(eta_star / rho, top)
     return kind, eta, phi
+
+
+@numba.njit(cache=True)
+def _pairwise_sum(a, n):
+    """a[:n].sum() added up in numpy's order for n <= 128 (numpy's
+    pairwise summation splits longer arrays), so that the compiled
+    `direction_weights` rounds exactly as `simplex_qp`. (Not recursive:
+    numba's cache does not reload recursive functions reliably.)"""
+    res = -0.0
+    if n < 8:
+        for i in range(n):
+            res += a[i]
+        return res
+    r = a[:8].copy()
+    i = 8
+    while i < n - n % 8:
+        for j in range(8):
+            r[j] += a[i + j]
+        i += 8
+    res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+    for j in range(i, n):
+        res += a[j]
+    return res
+
+
+def _solve_direction(P, c, lam, sample):
+    """piqp's part of `direction_weights` (run in object mode)."""
+    try:
+        lam[:c.size] = simplex_solve(P, c)
+    except QPError as exc:
+        _direction_failed(sample, exc)
+        return False
+    return True
+
+
+def _direction_failed(sample, reason):
+    warn(f"bundle QP failed at sample {sample} ({reason}); using the "
+         f"current subgradient only", IdentificationWarning)
+
+
+@numba.njit(cache=True)
+def direction_weights(H, beta, n, lam, sample):
+    """Bundle weights lam[:n] from the dual of (3.4), for n >= 2.
+
+    The compiled form of `simplex_qp` (the same arithmetic, the product
+    by BLAS as numpy's) on P = H[:n] H[:n]' and c = beta[:n]: both are
+    scaled by the largest of P's diagonal and |c|, piqp solves the
+    problem in object mode (`simplex_solve`), and its minimiser is
+    clipped to >= 0 and renormalised. If piqp fails, warns and uses the
+    current subgradient only (lam = e_1); `sample` is the sample number
+    the warning quotes.
+    """
+    Hn = H[:n]
+    P = np.dot(Hn, Hn.T)
+    scale = max(np.max(np.diag(P)), np.max(np.abs(beta[:n])), 1e-300)
+    P /= scale
+    c = beta[:n] / scale
+    with numba.objmode(ok='boolean'):
+        ok = _solve_direction(P, c, lam, sample)
+    if ok:
+        for j in range(n):
+            if lam[j] < 0.0:
+                lam[j] = 0.0
+        total = _pairwise_sum(lam, n)
+        if total > 0.0:
+            for j in range(n):
+                lam[j] /= total
+        else:
+            ok = False
+            with numba.objmode():
+                _direction_failed(sample,
+                                  "piqp returned no point of the simplex")
+    if not ok:
+        for j in range(n):
+            lam[j] = 0.0
+        lam[0] = 1.0
+
+
+@numba.njit(cache=True)
+def bundle_run(theta, trials, ntrial, s, o, u, ystar, y, xs, vs, zs, ys,
+               k0, k1, n_before, eta0, eta_max, rho, n_ls, q, q_star, gamma,
+               delta, step_bound, m_min, full_step_test, divergence_limit,
+               H, beta, lam, grad, theta_new, trial, t, history, errors,
+               kinds):
+    """The bundle method over samples k0..k1-1 (Steps 1-3 per sample).
+
+    Updates `theta` in place, keeps the last len(trials) trial points and
+    their distances s_j to the estimate in `trials` and `s` (the first
+    `ntrial` rows in use), and writes theta(k), e(k) and the step kind of
+    each sample into `history`, `errors` and `kinds`. `n_before` is the
+    number of samples processed before k0 (for warnings). Stops before a
+    sample whose new estimate is non-finite or exceeds `divergence_limit`
+    in absolute value, leaving theta at the last finite estimate. Returns
+    (the first sample not processed, k1 if all were; ntrial).
+    """
+    p = theta.size
+    cap = trials.shape[0] if H.shape[0] > 1 else 0
+    for k in range(k0, k1):
+        f0, e0, n = bundle_prepare(theta, trials, ntrial, s, o, u, ystar, y,
+                                   xs, vs, zs, k, gamma, H, beta, grad)
+        if n == 1:
+            lam[0] = 1.0
+        else:
+            direction_weights(H, beta, n, lam, n_before + k - k0)
+        kind, _, _ = bundle_finish(
+            theta, lam, H, beta, n, f0, e0, o, u, ystar, y, xs, vs, zs, ys,
+            k, eta0, eta_max, rho, n_ls, q, q_star, gamma, delta,
+            step_bound, m_min, theta_new, trial, t, grad, full_step_test)
+        for r in range(p):
+            if not np.isfinite(theta_new[r]) or (abs(theta_new[r])
+                                                 > divergence_limit):
+                return k, ntrial
+        if kind != STOP and cap:
+            for r in range(p):
+                t[r] = theta_new[r] - theta[r]
+            step = np.sqrt(np.dot(t, t))    # np.linalg.norm, bit for bit
+            for j in range(ntrial):
+                s[j] += step
+            if ntrial == cap:
+                for j in range(cap - 1):
+                    trials[j] = trials[j + 1]
+                    s[j] = s[j + 1]
+                ntrial -= 1
+            for r in range(p):
+                trials[ntrial, r] = trial[r]
+                t[r] = theta_new[r] - trial[r]
+            s[ntrial] = np.sqrt(np.dot(t, t))
+            ntrial += 1
+        for r in range(p):
+            theta[r] = theta_new[r]
+            history[k, r] = theta_new[r]
+        store_state(theta, o, u, ystar, xs, vs, zs, ys, k, grad)
+        errors[k] = e0
+        kinds[k] = kind
+    return k1, ntrial
 
 
 @numba.njit(cache=True)

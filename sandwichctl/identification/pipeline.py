@@ -49,7 +49,7 @@ __all__ = ['identify']
 #: Options of method='oe' and their defaults.
 OE_DEFAULTS = dict(widths=(0.05, 0.25), screen_iter=8, keep=3, max_iter=200,
                    tol=1e-10, min_fit=MIN_FIT, sp_iter=15, sp_starts=4,
-                   n_random=6, seed=0, refits=2, max_splits=16)
+                   n_random=6, seed=0, refits=2, max_splits=16, hops=6)
 
 @serial_blas
 def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
@@ -123,8 +123,9 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         tol (1e-10), min_fit (5, percent), max_splits (16: most pole/zero
         splits of the linear fit screened), sp_iter (15), sp_starts (4),
         n_random (6), seed (0), refits (2: L2 re-fits per refined
-        start); `docs/algorithm.md` explains them. Recursive methods: see
-        `RecursiveIdentifier`.
+        start), hops (6: perturbed restarts from the best); the
+        algorithm page of the documentation explains them. Recursive
+        methods: see `RecursiveIdentifier`.
 
     Returns
     -------
@@ -237,6 +238,7 @@ def _oe_options(options):
     opt['keep'] = check_int('keep', opt['keep'], 1)
     opt['refits'] = check_int('refits', opt['refits'], 0)
     opt['max_splits'] = check_int('max_splits', opt['max_splits'], 1)
+    opt['hops'] = check_int('hops', opt['hops'], 0)
     opt['max_iter'] = check_int('max_iter', opt['max_iter'], 1)
     opt['tol'] = check_positive('tol', opt['tol'])
     opt['min_fit'] = float(opt['min_fit'])
@@ -392,7 +394,7 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
     cands = [c for g in groups for c in g]
     widest = [g[-1] for g in groups]
     bar = _progress(progress, len(cands) + len(widest) + opt['sp_starts']
-                    + opt['n_random'] + 1 + opt['keep'])
+                    + opt['n_random'] + 1 + opt['keep'] + opt['hops'])
     screened = _screen(cands, probs, opt['screen_iter'] // 2, opt, bar)
     # stage 2: starts in other basins, through the series-parallel cost
     # (measured past outputs in L2: smoother, and exact without noise):
@@ -429,8 +431,9 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
         for _ in range(opt['refits']):
             phi = refit_l2(p.st, out['phi'], p.u, p.y, opt['max_iter'],
                            opt['tol'])
-            if phi is None:
-                break
+            if phi is None or not (p.st.cost(phi, p.u, p.y)
+                                   < out['cost'] * (1 - 1e-6)):
+                break                   # L2 is already the best for its v
             new = dict(lm(p.st, phi, p.u, p.y, opt['max_iter'],
                           opt['tol']), sign=out['sign'])
             if not new['cost'] < out['cost'] * (1 - 1e-9):
@@ -438,6 +441,13 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
             out = new
         if best is None or out['cost'] < best['cost']:
             best = out
+        bar.update()
+    # stage 4: hops from the best: perturbed copies refined to
+    # convergence (kinks of the cost stop LM short of a nearby better
+    # minimum, notably with square-wave inputs)
+    rng = np.random.default_rng(opt['seed'] + 1)
+    for _ in range(opt['hops']):
+        best = _hop(probs[best['sign']], best, opt, rng)
         bar.update()
     bar.close()
     cands += others
@@ -462,6 +472,34 @@ def _linear_as_sandwich(prob, lin, extend):
     out['message'] = ("no sandwich start improved on the linear fit: the "
                       "model is the linear fit with a closed backlash")
     return out
+
+
+#: A hop is refined to convergence only if a short run (screen_iter
+#: iterations) already brings it within this share of the best cost.
+HOP_SLACK = 0.1
+
+
+def _hop(prob, best, opt, rng, sigma=0.1):
+    """One perturbed restart: the model parameters of `best` moved by
+    `sigma` of their size (at least 0.05) and refined (to convergence if
+    a short run looks promising, see `HOP_SLACK`); the better of the
+    two."""
+    st = prob.st
+    for _ in range(20):
+        phi = best['phi'].copy()
+        size = np.maximum(np.abs(phi[:st.q]), 0.05)
+        phi[:st.q] += sigma * size * rng.standard_normal(st.q)
+        phi = st.clip(phi, 1e-9)
+        if st.stable(phi):
+            break
+    else:
+        return best
+    out = lm(st, phi, prob.u, prob.y, opt['screen_iter'], opt['tol'])
+    if not out['cost'] < best['cost'] * (1 + HOP_SLACK):
+        return best                   # on its way back up the same valley
+    out = dict(lm(st, out['phi'], prob.u, prob.y, opt['max_iter'],
+                  opt['tol']), sign=best['sign'])
+    return out if out['cost'] < best['cost'] else best
 
 
 def _screen(cands, probs, iterations, opt, bar):

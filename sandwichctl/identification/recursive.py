@@ -29,9 +29,8 @@ The interpretations of the places where the paper is loose are listed in
 
 import numpy as np
 
-from ._predictor import padding, store_state
-from ._qp import simplex_qp, QPError
-from ._recursive import (bundle_prepare, bundle_finish, gradient_run,
+from ._predictor import padding
+from ._recursive import (bundle_run, gradient_run,
                          rpem_run, LONG, SHORT, NULL, STOP, SKIP,
                          SUBGRADIENT, RPEM_OK, RPEM_LIMITED, RPEM_REJECTED,
                          RPEM_RESET)
@@ -280,6 +279,7 @@ class RecursiveIdentifier:
             self._ntrial = 0
             self._H = np.zeros((k1, p))
             self._beta = np.zeros(k1)
+            self._weights = np.zeros(k1)
             self._work = [np.zeros(p) for _ in range(3)]
 
     @property
@@ -350,16 +350,16 @@ class RecursiveIdentifier:
             arr[:pad] = arr[self._pos - pad:self._pos]
         self._pos = pad
 
-    def _diverged(self, theta):
-        return (not np.all(np.isfinite(theta))
-                or np.max(np.abs(theta)) > self.options['divergence_limit'])
-
-    def _record(self, theta, e, kind):
-        self.counts[_KIND_NAMES[kind]] += 1
+    def _record_block(self, hist, err, kinds):
+        """Count the step kinds of consecutive samples and, with
+        `keep_history`, keep their estimates (rows of `hist`), errors and
+        kinds."""
+        for kind, count in zip(*np.unique(kinds, return_counts=True)):
+            self.counts[_KIND_NAMES[kind]] += int(count)
         if self.keep_history:
-            self._hist.append(theta.copy())
-            self._err.append(e)
-            self._kind.append(kind)
+            self._hist.extend(hist.copy())
+            self._err.extend(err.tolist())
+            self._kind.extend(kinds.tolist())
 
     def _flag_divergence(self, k_abs):
         self.diverged_at = k_abs
@@ -384,8 +384,7 @@ class RecursiveIdentifier:
                  self.n_samples, opt['warmup'], self._lam, opt['lam0'],
                  opt['P0'], opt['p_max'], opt['max_step'], opt['m_min'],
                  opt['err_limit'], hist, err, kinds, *self._rwork)
-        for k in range(k0, k1):
-            self._record(hist[k], err[k], kinds[k])
+        self._record_block(hist[k0:k1], err[k0:k1], kinds[k0:k1])
         errors[:] = err[k0:k1]
         self._theta = theta
         return k1 - k0
@@ -405,8 +404,7 @@ class RecursiveIdentifier:
         if too_big.size and k0 + too_big[0] < stop:
             stop = k0 + too_big[0]
         done = stop - k0
-        for k in range(k0, stop):
-            self._record(hist[k], err[k], kinds[k])
+        self._record_block(hist[k0:stop], err[k0:stop], kinds[k0:stop])
         errors[:done] = err[k0:stop]
         if stop < k1:
             self._theta = hist[stop - 1].copy() if stop > k0 else self._theta
@@ -418,53 +416,22 @@ class RecursiveIdentifier:
     def _run_bundle(self, k0, k1, errors):
         opt = self.options
         ystar = self._y if opt['predictor'] == 'series-parallel' else self._ys
-        o, grad = self._o, self._grad
-        t, theta_new, trial = self._work
-        H, beta, trials, s = self._H, self._beta, self._trials, self._s
-        cap = trials.shape[0] if opt['k1'] > 1 else 0
-        for k in range(k0, k1):
-            theta = self._theta
-            f0, e0, n = bundle_prepare(
-                theta, trials, self._ntrial, s, o, self._u, ystar, self._y,
-                self._xs, self._vs, self._zs, k, opt['gamma'], H, beta, grad)
-            if n == 1:
-                lam = np.ones(1)
-            else:
-                Hn = H[:n]
-                try:
-                    lam = simplex_qp(Hn @ Hn.T, beta[:n].copy())
-                except QPError as exc:
-                    warn(f"bundle QP failed at sample "
-                         f"{self.n_samples + k - k0} ({exc}); using the "
-                         f"current subgradient only", IdentificationWarning)
-                    lam = np.zeros(n)
-                    lam[0] = 1.0
-            kind, eta, phi = bundle_finish(
-                theta, lam, H, beta, n, f0, e0, o, self._u, ystar, self._y,
-                self._xs, self._vs, self._zs, self._ys, k, opt['eta0'],
-                opt['eta_max'], opt['rho'], opt['n_ls'], opt['q'],
-                opt['q_star'], opt['gamma'], opt['delta'], opt['step_bound'],
-                opt['m_min'], theta_new, trial, t, grad,
-                opt['full_step_test'])
-            if self._diverged(theta_new):
-                self._flag_divergence(self.n_samples + k - k0)
-                return k - k0
-            if kind != STOP and cap:
-                step = np.linalg.norm(theta_new - theta)
-                s[:self._ntrial] += step
-                if self._ntrial == cap:
-                    trials[:-1] = trials[1:]
-                    s[:-1] = s[1:]
-                    self._ntrial -= 1
-                trials[self._ntrial] = trial
-                s[self._ntrial] = np.linalg.norm(theta_new - trial)
-                self._ntrial += 1
-            self._theta = theta_new.copy()
-            store_state(self._theta, o, self._u, ystar, self._xs, self._vs,
-                        self._zs, self._ys, k, grad)
-            errors[k - k0] = e0
-            self._record(self._theta, e0, kind)
-        return k1 - k0
+        hist, err, kinds = self._buf
+        stop, self._ntrial = bundle_run(
+            self._theta, self._trials, self._ntrial, self._s, self._o,
+            self._u, ystar, self._y, self._xs, self._vs, self._zs, self._ys,
+            k0, k1, self.n_samples, opt['eta0'], opt['eta_max'], opt['rho'],
+            opt['n_ls'], opt['q'], opt['q_star'], opt['gamma'],
+            opt['delta'], opt['step_bound'], opt['m_min'],
+            opt['full_step_test'], opt['divergence_limit'], self._H,
+            self._beta, self._weights, self._grad, *self._work, hist, err,
+            kinds)
+        done = stop - k0
+        self._record_block(hist[k0:stop], err[k0:stop], kinds[k0:stop])
+        errors[:done] = err[k0:stop]
+        if stop < k1:
+            self._flag_divergence(self.n_samples + done)
+        return done
 
     # ------------------------------------------------------------------
     def result(self, elapsed=None):
