@@ -39,6 +39,7 @@ from .._checks import (check_discrete_siso_tf, check_signal, common_dt,
                        check_vector)
 
 __all__ = ['TrackingController', 'tracking_controller', 'closed_loop_system',
+           'ClosedLoopSystem',
            'closed_loop_response', 'steps_and_sines', 'CompensationDemo',
            'closed_loop_demo']
 
@@ -424,10 +425,29 @@ def closed_loop_system(plant, controller, compensator=None, name=None):
 
     Returns
     -------
-    control.InterconnectedSystem
+    ClosedLoopSystem
+        A ``control.InterconnectedSystem`` that also pickles (it is rebuilt
+        from its parts; python-control's state-space blocks do not pickle).
+
+    Examples
+    --------
+    >>> import pickle, numpy as np, control as ct, sandwichctl as sw
+    >>> plant = sw.examples.paper_plant()
+    >>> comp = sw.sandwich_compensator(plant)
+    >>> ctrl = sw.tracking_controller(comp.design_plant)
+    >>> loop = sw.closed_loop_system(plant, ctrl, comp, name='loop')
+    >>> loop.input_labels, loop.output_labels
+    (['r_ahead'], ['y', 'u'])
+    >>> again = pickle.loads(pickle.dumps(loop))
+    >>> r = np.ones(20)
+    >>> a = ct.input_output_response(loop, np.arange(20), r).outputs
+    >>> b = ct.input_output_response(again, np.arange(20), r).outputs
+    >>> bool(np.array_equal(a, b))
+    True
     """
     dt = _check_loop(plant, controller, compensator)
     name = check_name('name', name)
+    parts = (plant, controller, compensator, name)
     d = controller.preview
     blocks = [SandwichSystem(plant.L1, plant.backlash, plant.L2,
                              name='plant', inputs='u', outputs='y'),
@@ -451,9 +471,24 @@ def closed_loop_system(plant, controller, compensator=None, name=None):
             compensator.model, compensator.smoothing,
             compensator.band_fraction, compensator._approximate,
             name='compensator'))
-    return ct.interconnect(blocks, inplist=['r_ahead'], outlist=['y', 'u'],
+    loop = ct.interconnect(blocks, inplist=['r_ahead'], outlist=['y', 'u'],
                            inputs=['r_ahead'], outputs=['y', 'u'], dt=dt,
                            name=name)
+    loop.__class__ = ClosedLoopSystem
+    loop._parts = parts
+    return loop
+
+
+class ClosedLoopSystem(ct.InterconnectedSystem):
+    """The ``control.InterconnectedSystem`` built by `closed_loop_system`.
+
+    It behaves exactly as the interconnection python-control returns; it
+    only adds pickling, by rebuilding the loop from the plant, controller,
+    compensator and name it was made of.
+    """
+
+    def __reduce__(self):
+        return (closed_loop_system, self._parts)
 
 
 def steps_and_sines(n=1200, levels=(0.0, 1.0, -0.5, 1.5, 0.3),
