@@ -1,5 +1,7 @@
 """Tests of the linear output-error identifier `identify_linear`."""
 
+import warnings
+
 import numpy as np
 import control as ct
 import pytest
@@ -213,6 +215,28 @@ def test_private_fit_oe_on_scaled_arrays(rng):
     np.testing.assert_allclose(out['B'], res.B, rtol=1e-6)
     np.testing.assert_allclose(out['F'], res.F, rtol=1e-6)
     np.testing.assert_allclose(out['cost'], res.cost, rtol=1e-6)
+
+
+@pytest.mark.parametrize('integrators', [0, 1])
+def test_output_offsets_with_slow_inputs_and_integrators(integrators):
+    """An output offset costs nothing on noise-free data, even with an
+    integrator and a slow input (the start fits a constant per experiment
+    too), over two experiments of different lengths."""
+    rng = np.random.default_rng(3)
+    F = np.convolve([1, -0.5], [1.0, -1.0] if integrators else [1, -0.3])
+    B = np.array([0.5, 0.2])
+    parts = []
+    for n, offset in ((250, 0.7), (400, -0.3)):
+        u = np.sin(0.03 * np.arange(n)) + 0.3 * rng.standard_normal(n)
+        y = lfilter(np.r_[0.0, B], F, u) + offset
+        parts.append((u, y))
+    us, ys = [p[0] for p in parts], [p[1] for p in parts]
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')           # no empty-slice means
+        out = _fit_oe(us, ys, 2, 2, 1, integrators, offsets=True)
+    assert out['cost'] < 1e-18
+    np.testing.assert_allclose(out['offsets'], [0.7, -0.3], atol=1e-8)
+    np.testing.assert_allclose(out['F'], F, atol=1e-8)
 
 
 def test_result_repr_and_fields(rng):

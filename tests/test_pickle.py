@@ -156,12 +156,14 @@ def test_closed_loop_system(compensate):
     design = comp.design_plant if compensate else sw.linearized_plant(plant)
     ctrl = sw.tracking_controller(design)
     loop = sw.closed_loop_system(plant, ctrl, comp, name='loop')
+    loop.set_outputs(['position', 'command'])         # changed after
     r = sw.steps_and_sines(40, levels=(0, 1.0, -0.5), periods=(13, 7))
     ref = ct.input_output_response(loop, np.arange(r.size), r).outputs
     for other in _roundtrips(loop):
         assert isinstance(other, ct.InterconnectedSystem)
         assert other.name == 'loop'
-        assert other.output_labels == ['y', 'u']
+        assert other.output_labels == ['position', 'command']
+        assert other.state_labels == loop.state_labels
         out = ct.input_output_response(other, np.arange(r.size), r).outputs
         assert np.array_equal(out, ref)
 

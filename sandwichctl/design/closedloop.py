@@ -22,6 +22,7 @@ integral action handles. `CompensationDemo` reports the input activity so
 that the options can be compared (``benchmarks/bench_compensation.py``).
 """
 
+import copy
 import warnings
 
 import numba
@@ -482,13 +483,43 @@ def closed_loop_system(plant, controller, compensator=None, name=None):
 class ClosedLoopSystem(ct.InterconnectedSystem):
     """The ``control.InterconnectedSystem`` built by `closed_loop_system`.
 
-    It behaves exactly as the interconnection python-control returns; it
-    only adds pickling, by rebuilding the loop from the plant, controller,
-    compensator and name it was made of.
+    It is the interconnection python-control returns, with pickling
+    added: it is rebuilt from the plant, controller and compensator it was
+    made of, and its name, signal names and parameters are then set as
+    they were. ``copy`` and ``deepcopy`` copy it as any other system.
     """
 
     def __reduce__(self):
-        return (closed_loop_system, self._parts)
+        parts = getattr(self, '_parts', None)
+        if parts is None:
+            raise TypeError("only a ClosedLoopSystem made by "
+                            "closed_loop_system can be pickled")
+        return (_rebuild_loop, (parts[:3], self.name, self.input_labels,
+                                self.output_labels, self.state_labels,
+                                dict(self.params)))
+
+    def __copy__(self):
+        new = object.__new__(type(self))
+        new.__dict__.update(self.__dict__)
+        return new
+
+    def __deepcopy__(self, memo):
+        new = object.__new__(type(self))
+        memo[id(self)] = new
+        for key, value in self.__dict__.items():
+            setattr(new, key, copy.deepcopy(value, memo))
+        return new
+
+
+def _rebuild_loop(parts, name, inputs, outputs, states, params):
+    """Unpickle a `ClosedLoopSystem`: build it again, then restore its
+    name, signal names and parameters."""
+    loop = closed_loop_system(*parts, name=name)
+    loop.set_inputs(inputs)
+    loop.set_outputs(outputs)
+    loop.set_states(states)
+    loop.params = params
+    return loop
 
 
 def steps_and_sines(n=1200, levels=(0.0, 1.0, -0.5, 1.5, 0.3),

@@ -189,11 +189,16 @@ def refit_l2(st, phi, u, y, max_iter=100, tol=1e-10):
     u, y : list of ndarray
         The scaled experiments.
 
+    The linear fit starts from rest; estimated initial conditions (if the
+    structure has them) are kept, their past v scaled with the slopes.
+
     Returns
     -------
     ndarray or None
-        The new phi, or None when the fit gives no admissible start (a
-        leading coefficient of the wrong sign, unstable, not finite).
+        The new phi, or None when the fit gives no admissible start (v
+        constant, a leading coefficient of the wrong sign, a denominator
+        not strictly stable or a zero beyond the structure's zero radius,
+        a value not finite).
     """
     theta = st.theta(phi)
     vs = [oe_signals(theta, st.o, uu, st.init(phi, e))[2]
@@ -218,4 +223,8 @@ def refit_l2(st, phi, u, y, max_iter=100, tol=1e-10):
     out[st.q:] = phi[st.q:]
     if st.n_off:
         out[st.q:st.q + st.n_off] = fit['offsets'][:st.n_off]
+    kx, kv = st.init_sizes[:2]
+    for e in range(st.n_inits):           # past v scales with the slopes
+        at = st.q + st.n_off + e * st.n_init + kx
+        out[at:at + kv] *= B[0] / sv
     return out if st.stable(out) else None

@@ -120,17 +120,34 @@ def _lstsq(phi, y):
     return x / d
 
 
-def _arx(v, y, nb, m, nk):
-    """ARX least squares: F'(q) y = q^-nk B(q) v + e; returns b, F'."""
-    theta = _lstsq(np.hstack([_delays(v, nk, nb), -_delays(y, 1, m)]),
-                   np.concatenate(_segs(y)))
+def _centred(x, segs, offsets):
+    """x (samples stacked over the experiments `segs`, rows for a matrix)
+    with each experiment's mean removed, if `offsets`: least squares on
+    centred columns is least squares with a constant per experiment."""
+    if not offsets:
+        return x
+    return np.concatenate([part - part.mean(axis=0)
+                           for part in _split(x, segs)])
+
+
+def _arx(v, y, nb, m, nk, offsets=False):
+    """ARX least squares: F'(q) y = q^-nk B(q) v (+ a constant per
+    experiment with `offsets`) + e; returns b, F'."""
+    segs = _segs(y)
+    theta = _lstsq(
+        _centred(np.hstack([_delays(v, nk, nb), -_delays(y, 1, m)]), segs,
+                 offsets),
+        _centred(np.concatenate(segs), segs, offsets))
     return theta[:nb], np.concatenate([[1.0], theta[nb:]])
 
 
-def _b_given_f(v, y, fp, nb, nk):
+def _b_given_f(v, y, fp, nb, nk, offsets=False):
     """Least-squares B for a fixed denominator F'."""
-    return _lstsq(_delays(_split(_filt([1.0], fp, v), _segs(v)), nk, nb),
-                  np.concatenate(_segs(y)))
+    segs = _segs(y)
+    return _lstsq(
+        _centred(_delays(_split(_filt([1.0], fp, v), _segs(v)), nk, nb),
+                 segs, offsets),
+        _centred(np.concatenate(segs), segs, offsets))
 
 
 def _stabilise(fp):
@@ -163,21 +180,30 @@ def _normal(jac, r):
     return (jac.T @ jac) / np.outer(d, d), (jac.T @ r) / d, d
 
 
-def _start(v, y, nb, m, nk):
-    """ARX start, stabilised, B refitted, improved by Steiglitz-McBride."""
-    b, fp = _arx(v, y, nb, m, nk)
+def _start(v, y, nb, m, nk, offsets=False):
+    """ARX start, stabilised, B refitted, improved by Steiglitz-McBride
+    (with `offsets`, a constant per experiment in every least-squares
+    fit and in the cost)."""
+    segs = _segs(y)
+    b, fp = _arx(v, y, nb, m, nk, offsets)
     if not np.all(np.isfinite(fp)):
         fp = np.concatenate([[1.0], np.zeros(m)])
     fp = _stabilise(fp)
-    b = _b_given_f(v, y, fp, nb, nk)
-    yc = np.concatenate(_segs(y))
-    cost = _cost(yc, _simulate(b, fp, v, nk))
+    b = _b_given_f(v, y, fp, nb, nk, offsets)
+    yc = np.concatenate(segs)
+
+    def cost_of(b, fp):
+        return _cost(_centred(yc - _simulate(b, fp, v, nk), segs, offsets),
+                     0.0)
+
+    cost = cost_of(b, fp)
     for _ in range(_SM_ITER if m else 0):
         b_t, fp_t = _arx(_split(_filt([1.0], fp, v), _segs(v)),
-                         _split(_filt([1.0], fp, y), _segs(y)), nb, m, nk)
+                         _split(_filt([1.0], fp, y), segs), nb, m, nk,
+                         offsets)
         if not _max_root(fp_t) < _RADIUS:
             break
-        cost_t = _cost(yc, _simulate(b_t, fp_t, v, nk))
+        cost_t = cost_of(b_t, fp_t)
         if not cost_t < cost:
             break
         b, fp, cost = b_t, fp_t, cost_t
@@ -222,17 +248,12 @@ def _fit_oe(u, y, nb, nf, nk, integrators, max_iter=100, tol=1e-10,
     y = np.concatenate(ys)
 
     def centre(x):
-        """Subtract each experiment's mean (rows, for a matrix)."""
-        if not offsets:
-            return x
-        return np.concatenate([part - part.mean(axis=0)
-                               for part in _split(x, ys)])
+        return _centred(x, ys, offsets)
 
     def cost_of(yhat):
         return _cost(centre(y - yhat), 0.0)
 
-    b, fp = _start(v, [centre(part) for part in ys] if offsets else ys,
-                   nb, m, nk)
+    b, fp = _start(v, ys, nb, m, nk, offsets)
     theta = np.concatenate([b, fp[1:]])
     yhat = _simulate(b, fp, v, nk)
     cost = cost_of(yhat)
