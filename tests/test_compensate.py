@@ -1,5 +1,7 @@
 """Tests of the compensator (issue 5): backlash inverse, L1 inverse, loop."""
 
+import warnings
+
 import numpy as np
 import control as ct
 import pytest
@@ -497,3 +499,31 @@ def test_compensator_simulate_labels_and_time():
     step = sw.step_response(comp, amplitude=0.5)
     np.testing.assert_array_equal(
         step.outputs, comp.simulate(np.full(step.time.size, 0.5)).outputs)
+
+
+@pytest.mark.parametrize('block', ['L1', 'L2'])
+def test_integrating_plant_is_compensated(block):
+    """A speed command in, a position out: the pole at z = 1 sits in L1
+    (the nut integrates the speed before the play) or in L2. The exact
+    compensator cancels the play: plant after compensator equals its
+    linear design plant (integrator included). With the integrator in
+    L1, the design plant is stable and the tracking loop closes."""
+    integ, other = [-1.6, 0.6], [-0.5]
+    a, c = (integ, other) if block == 'L1' else (other, integ)
+    plant = sw.SandwichSystem.from_coefficients(
+        a=a, b=[1.0], c=c, d=[1.0, 0.3], m1=1.0, m2=1.1, D1=0.05, D2=0.08,
+        dt=0.01)
+    poles = np.concatenate([plant.L1.poles(), plant.L2.poles()])
+    assert np.min(np.abs(poles - 1)) < 1e-12
+    comp = sw.sandwich_compensator(plant)
+    v = sw.steps_and_sines(300, levels=(0, 1.0, -0.5), periods=(60, 30))
+    y = plant.simulate(comp.simulate(v).outputs).outputs
+    y_design = ct.forced_response(comp.design_plant, np.arange(v.size) * 0.01,
+                                  v).outputs
+    np.testing.assert_allclose(y, y_design, atol=1e-9 * np.max(np.abs(y)))
+    if block == 'L1':
+        with warnings.catch_warnings():
+            warnings.simplefilter('ignore')     # margins of the loop
+            demo = sw.closed_loop_demo(plant, plant, reference=v)
+        assert np.all(np.isfinite(demo.with_compensation.outputs))
+        assert demo.ratio < 0.05
