@@ -180,18 +180,21 @@ def oe_steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1, past,
     ia, im, ib, idd = _idx(o)
     m1, m2, D1, D2 = theta[im], theta[im + 1], theta[im + 2], theta[im + 3]
     p = theta.size
+    # x and v depend only on L1 and the backlash: theta[ia:idd] (a, m1,
+    # m2, D1, D2, b). Their other sensitivity columns stay at the zeros
+    # the caller's buffers hold, so only these are computed.
     y = 0.0
     for k in range(k0, k1):
         # L1, eq. (2.1); rows are updated whole (contiguous) for speed
         x = l1_output(theta, o, u, xs, k)
         xs[k] = x
         rx = Sx[k]
-        for r in range(p):
+        for r in range(ia, idd):
             rx[r] = 0.0
         for i in range(1, na + 1):
             ai = theta[ia + i - 1]
             prev = Sx[k - i]
-            for r in range(p):
+            for r in range(ia, idd):
                 rx[r] -= ai * prev[r]
             rx[ia + i - 1] -= xs[k - i]
         for j in range(1, nb + 1):
@@ -203,11 +206,11 @@ def oe_steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1, past,
         rv = Sv[k]
         if zone == 0:
             prev = Sv[k - 1]
-            for r in range(p):
+            for r in range(ia, idd):
                 rv[r] = prev[r]
         else:
             m = m1 if zone == 1 else m2
-            for r in range(p):
+            for r in range(ia, idd):
                 rv[r] = m * rx[r]
             add_direct_partials(rv, 1.0, zone, x, m1, m2, D1, D2, im)
         # L2, eq. (2.1)
@@ -225,7 +228,7 @@ def oe_steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1, past,
         for j in range(nd + 1):
             dj = 1.0 if j == 0 else theta[idd + j - 1]
             prev = Sv[k - q2 - j]
-            for r in range(p):
+            for r in range(ia, idd):
                 ry[r] += dj * prev[r]
         for i in range(1, nc + 1):
             ry[i - 1] -= past[k - i]
