@@ -9,7 +9,7 @@ from scipy.optimize import minimize
 import sandwichctl as sw
 from sandwichctl.identification import _predictor as pr
 from sandwichctl.identification import _recursive as rc
-from sandwichctl.identification._qp import simplex_qp
+from sandwichctl.identification._recursive import direction_weights
 
 ORDERS = (2, 1, 2, 1, 1, 1)     # na, nb, nc, nd, q1, q2
 
@@ -96,11 +96,12 @@ def test_exact_sensitivities_match_finite_differences(rng):
     assert np.any(np.abs(J[mem]) > 1e-3)
 
 
-def test_simplex_qp_on_simplex_and_descent(rng):
+def test_bundle_weights_on_simplex_and_descent(rng):
     for n in (2, 4, 6):
         H = rng.normal(0, 1, (n, 5))
         beta = np.concatenate([[0.0], rng.uniform(0, 0.5, n - 1)])
-        lam = simplex_qp(H @ H.T, beta)
+        lam = np.full(n, np.nan)
+        direction_weights(H, beta, n, lam, 0)
         assert np.all(lam >= 0) and lam.sum() == pytest.approx(1, abs=1e-12)
         # independent oracle: SLSQP on the same dual problem
         obj = lambda l: 0.5 * np.sum((l @ H) ** 2) + l @ beta

@@ -4,7 +4,8 @@ Two problems are solved with piqp:
 
 * the dual of the bundle direction problem (3.4) over the unit simplex,
   ``min 0.5 lam' P lam + c' lam  s.t.  sum(lam) = 1, lam >= 0``, in
-  `simplex_qp`;
+  `simplex_solve` (scaled and projected by the bundle recursion's
+  compiled `_recursive.direction_weights`);
 * box-constrained least-squares steps ``min 0.5 d' P d + c' d  s.t.
   lo <= d <= hi`` in `box_qp` (used by the batch refinement).
 
@@ -14,8 +15,7 @@ the status, because positional calls written for older versions silently
 mean something else.
 
 The simplex problems of one size n share A = ones(1, n), b = 1 and
-x_l = 0, so `simplex_solve` (the solve behind `simplex_qp` and the
-bundle recursion's compiled weights) keeps one set-up solver per n (per
+x_l = 0, so `simplex_solve` keeps one set-up solver per n (per
 thread) and only updates P and c between calls. piqp recomputes its
 preconditioner on every update (``preconditioner_reuse_on_update`` off)
 and starts each solve afresh, so an updated solver returns bit for bit
@@ -67,8 +67,9 @@ def _solve(P, c, A=None, b=None, x_l=None, x_u=None, accept_max_iter=False):
 def simplex_solve(P, c):
     """piqp's minimiser of 0.5 x' P x + c' x over the unit simplex.
 
-    The bare solve of `simplex_qp` (no scaling, no projection), with this
-    thread's solver for size n = c.size updated to (P, c). Returns x as
+    The bare solve (no scaling, no projection: `direction_weights` does
+    those), with this thread's solver for size n = c.size updated to
+    (P, c). Returns x as
     piqp gives it; raises `QPError` unless piqp solved the problem or
     stopped at its iteration limit with a finite iterate.
     """
@@ -92,29 +93,6 @@ def simplex_solve(P, c):
     if _REUSE:
         solvers[n] = solver
     return _accept(solver, status, accept_max_iter=True)
-
-
-def simplex_qp(P, c):
-    """Minimise 0.5 lam' P lam + c' lam over the unit simplex.
-
-    P (n x n, positive semidefinite) and c are scaled together by the
-    largest diagonal entry of P before the solve, which leaves the
-    minimiser unchanged and keeps piqp's absolute tolerances meaningful
-    when the subgradients are tiny. The result is clipped to >= 0 and
-    renormalised to sum to one (it is feasible to piqp's tolerance). If
-    piqp stops at its iteration limit (it can on nearly collinear bundles)
-    its last iterate, projected the same way, is used: any point of the
-    simplex gives a valid convex combination of subgradients.
-    """
-    n = c.size
-    if n == 1:
-        return np.ones(1)
-    scale = max(float(np.max(np.diag(P))), float(np.max(np.abs(c))), 1e-300)
-    lam = simplex_solve(P / scale, c / scale)
-    lam = np.clip(lam, 0.0, None)
-    if not lam.sum() > 0:
-        raise QPError("piqp returned no point of the simplex")
-    return lam / lam.sum()
 
 
 def box_qp(P, c, lo, hi):

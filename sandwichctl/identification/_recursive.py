@@ -195,8 +195,9 @@ def bundle_finish(theta, lam, H, beta, n, f0, e0, o, u, ystar, y, xs, vs,
 def _pairwise_sum(a, n):
     """a[:n].sum() added up in numpy's order for n <= 128 (numpy's
     pairwise summation splits longer arrays), so that the compiled
-    `direction_weights` rounds exactly as `simplex_qp`. (Not recursive:
-    numba's cache does not reload recursive functions reliably.)"""
+    `direction_weights` rounds exactly as the same steps in numpy do.
+    (Not recursive: numba's cache does not reload recursive functions
+    reliably.)"""
     res = -0.0
     if n < 8:
         for i in range(n):
@@ -233,11 +234,16 @@ def _direction_failed(sample, reason):
 def direction_weights(H, beta, n, lam, sample):
     """Bundle weights lam[:n] from the dual of (3.4), for n >= 2.
 
-    The compiled form of `simplex_qp` (the same arithmetic, the product
-    by BLAS as numpy's) on P = H[:n] H[:n]' and c = beta[:n]: both are
-    scaled by the largest of P's diagonal and |c|, piqp solves the
+    On P = H[:n] H[:n]' (the product by BLAS, as numpy's) and c =
+    beta[:n]: both are scaled by the largest of P's diagonal and |c|,
+    which leaves the minimiser unchanged and keeps piqp's absolute
+    tolerances meaningful when the subgradients are tiny; piqp solves the
     problem in object mode (`simplex_solve`), and its minimiser is
-    clipped to >= 0 and renormalised. If piqp fails, warns and uses the
+    clipped to >= 0 and renormalised to sum to one (it is feasible only
+    to piqp's tolerance). If piqp stops at its iteration limit (it can on
+    nearly collinear bundles) its last iterate, projected the same way,
+    is used: any point of the simplex gives a valid convex combination
+    of subgradients. If piqp fails, warns and uses the
     current subgradient only (lam = e_1); `sample` is the sample number
     the warning quotes.
     """
