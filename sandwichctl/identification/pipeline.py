@@ -388,9 +388,10 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
             group.append((s, opened))
         groups.append(group)
     if len(groups) > opt['max_splits']:
-        groups.sort(key=lambda g: probs[g[-1][0]].st.cost(
-            g[-1][1], probs[g[-1][0]].u, probs[g[-1][0]].y))
-        groups = groups[:opt['max_splits']]
+        def widest_cost(group):
+            s, phi = group[-1]
+            return probs[s].st.cost(phi, probs[s].u, probs[s].y)
+        groups = sorted(groups, key=widest_cost)[:opt['max_splits']]
     cands = [c for g in groups for c in g]
     widest = [g[-1] for g in groups]
     bar = _progress(progress, len(cands) + len(widest) + opt['sp_starts']
@@ -434,11 +435,9 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
             if phi is None or not (p.st.cost(phi, p.u, p.y)
                                    < out['cost'] * (1 - 1e-6)):
                 break                   # L2 is already the best for its v
-            new = dict(lm(p.st, phi, p.u, p.y, opt['max_iter'],
+            # lm never raises the cost, so this refinement is an improvement
+            out = dict(lm(p.st, phi, p.u, p.y, opt['max_iter'],
                           opt['tol']), sign=out['sign'])
-            if not new['cost'] < out['cost'] * (1 - 1e-9):
-                break
-            out = new
         if best is None or out['cost'] < best['cost']:
             best = out
         bar.update()

@@ -364,6 +364,17 @@ def _model_label(label, val):
     return f"{label}: max rel. error {val['max_relative_error']:.1%}"
 
 
+def _plot_models(ax, run, labels, x, **style):
+    """Each model's validation output against x; an unstable model gets
+    only its legend entry."""
+    for label in _labels(run, labels):
+        val = run['validation'][label]
+        if val['stable']:
+            ax.plot(x, val['yhat'], label=_model_label(label, val), **style)
+        else:
+            ax.plot([], [], lw=1, label=_model_label(label, val))
+
+
 def plot_validation(run, labels=None, ax=None):
     """Fig. 7(a): measured and simulated speed on the fresh record.
 
@@ -385,12 +396,7 @@ def plot_validation(run, labels=None, ax=None):
         ax = plt.gca()
     t = run['plant'].dt * np.arange(run['y_val'].size)
     ax.plot(t, run['y_val'], color='k', lw=1.2, label='measured')
-    for label in _labels(run, labels):
-        val = run['validation'][label]
-        if val['stable']:
-            ax.plot(t, val['yhat'], lw=1, label=_model_label(label, val))
-        else:
-            ax.plot([], [], lw=1, label=_model_label(label, val))
+    _plot_models(ax, run, labels, t, lw=1)
     ax.set_xlabel('time [s]')
     ax.set_ylabel('platform speed y [mm/s]')
     ax.set_title('Fig. 7(a): validation on fresh data')
@@ -418,13 +424,7 @@ def plot_input_output(run, labels=None, ax=None):
     if ax is None:
         ax = plt.gca()
     ax.plot(run['u_val'], run['y_val'], color='k', lw=0.8, label='measured')
-    for label in _labels(run, labels):
-        val = run['validation'][label]
-        if val['stable']:
-            ax.plot(run['u_val'], val['yhat'], lw=0.8, ls='--',
-                    label=_model_label(label, val))
-        else:
-            ax.plot([], [], lw=1, label=_model_label(label, val))
+    _plot_models(ax, run, labels, run['u_val'], lw=0.8, ls='--')
     ax.set_xlabel('input u [V]')
     ax.set_ylabel('platform speed y [mm/s]')
     ax.set_title('Fig. 7(b): input-output plot')
