@@ -110,10 +110,84 @@ def test_a_hop_never_raises_the_cost_and_is_seeded():
 
 
 @pytest.mark.parametrize('option, value', [('hops', -1), ('refits', 1.5),
-                                           ('max_splits', 0)])
+                                           ('max_splits', 0),
+                                           ('relocate', -1),
+                                           ('screen_samples', 10)])
 def test_search_options_are_checked(option, value):
     plant = sw.examples.paper_plant()
     u = sw.examples.paper_input(500, seed=1)
     y = plant.simulate(u).outputs
     with pytest.raises((TypeError, ValueError), match=option):
         sw.identify(u, y, **plant.orders, **{option: value})
+
+
+def test_relocations_move_one_root_and_keep_the_spread_of_x():
+    """Each candidate differs from the start in one real root or one
+    conjugate pair of L1's poles or zeros; the slopes and widths follow
+    the spread of x = L1[u], so the backlash output keeps its size."""
+    from sandwichctl.identification._moves import relocations, l1_std
+    rng = np.random.default_rng(3)
+    st = Structure(3, 2, 2, 1, 1, 1)
+    u = [rng.standard_normal(800)]
+    phi = np.zeros(st.size)
+    phi[:st.nc_free] = np.poly([0.5, -0.2])[1:]
+    phi[st.nc_free:st.im] = np.real(np.poly([0.6 + 0.3j, 0.6 - 0.3j,
+                                             0.2]))[1:]
+    phi[st.im:st.im + 4] = [0.8, 1.1, 0.2, 0.3]
+    ib = st.im + 4
+    phi[ib:ib + 2] = np.poly([0.4, -0.7])[1:]
+    phi[ib + 2:] = [0.3]
+    cands = relocations(st, phi, u)
+    # 2 pole units (7 real + 8 pair targets) and 2 real zeros (7 each)
+    assert len(cands) == 7 + 8 + 7 + 7
+    s0 = l1_std(st, phi, u)
+    for cand in cands:
+        np.testing.assert_array_equal(cand[:st.nc_free], phi[:st.nc_free])
+        np.testing.assert_array_equal(cand[ib + 2:], phi[ib + 2:])
+        moved_poles = not np.allclose(cand[st.nc_free:st.im],
+                                      phi[st.nc_free:st.im])
+        moved_zeros = not np.allclose(cand[ib:ib + 2], phi[ib:ib + 2])
+        assert moved_poles != moved_zeros
+        ratio = l1_std(st, cand, u) / s0
+        np.testing.assert_allclose(cand[st.im:st.im + 2] * ratio,
+                                   phi[st.im:st.im + 2], rtol=1e-12)
+        np.testing.assert_allclose(cand[st.im + 2:st.im + 4] / ratio,
+                                   phi[st.im + 2:st.im + 4], rtol=1e-12)
+
+
+@pytest.mark.parametrize('seed', [8, 9, 14])
+def test_a_relocation_leaves_the_valley_of_a_wrong_l1_pole(seed):
+    """Noise-free: with one real pole of L1 reflected to the other side of
+    the origin and L2 re-fitted, Levenberg-Marquardt stalls in a wrong
+    valley; one round of relocations recovers the plant exactly."""
+    from sandwichctl.data import random_case
+    from sandwichctl.identification._oe import lm
+    from sandwichctl.identification.pipeline import _relocate, _oe_options
+    case = random_case(seed, snr=np.inf, n=1500, input_kind='square+sine')
+    prob = Problem(case.u, case.y, case.orders)
+    st = prob.st
+    truth = prob.phi_of_model(case.plant)
+    roots = np.roots(np.r_[1.0, truth[st.nc_free:st.im]])
+    i = int(np.argmin(np.abs(roots.imag)))
+    roots[i] = -roots[i].real
+    start = truth.copy()
+    start[st.nc_free:st.im] = np.real(np.poly(roots))[1:]
+    refit = refit_l2(st, start, prob.u, prob.y)
+    start = start if refit is None else refit
+    stuck = dict(lm(st, start, prob.u, prob.y, 200), sign=1)
+    energy = 0.5 * float(prob.y[0] @ prob.y[0])
+    assert stuck['cost'] > 1e-3 * energy
+    moved = _relocate(prob, stuck, _oe_options({}))
+    assert moved['cost'] < 1e-12 * energy
+    np.testing.assert_allclose(moved['phi'], truth, atol=1e-6)
+
+
+def test_screening_uses_the_leading_samples_of_each_experiment():
+    from sandwichctl.identification.pipeline import _head
+    parts = [np.arange(3000.0), np.arange(1000.0)]
+    heads = _head(parts, 2000)
+    assert [h.size for h in heads] == [1500, 500]
+    np.testing.assert_array_equal(heads[1], parts[1][:500])
+    assert _head(parts, 5000) is parts
+    assert [h.size for h in _head([np.ones(5000), np.ones(10)], 100)] == [
+        100, 10]

@@ -28,10 +28,10 @@ import time
 import warnings
 
 import numpy as np
-from scipy.signal import lfilter
 
 from ._data import prepare
 from ._nested import splits, refit_l2
+from ._moves import relocations, l1_std
 from ._oe import lm
 from ._predictor import padding, stable_and_finite
 from .batch import Problem, refine as _refine, _progress_range, \
@@ -49,7 +49,8 @@ __all__ = ['identify']
 #: Options of method='oe' and their defaults.
 OE_DEFAULTS = dict(widths=(0.05, 0.25), screen_iter=8, keep=3, max_iter=200,
                    tol=1e-10, min_fit=MIN_FIT, sp_iter=15, sp_starts=4,
-                   n_random=6, seed=0, refits=2, max_splits=16, hops=6)
+                   n_random=6, seed=0, refits=2, max_splits=16, hops=6,
+                   relocate=2, screen_samples=2000)
 
 @serial_blas
 def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
@@ -123,7 +124,10 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         tol (1e-10), min_fit (5, percent), max_splits (16: most pole/zero
         splits of the linear fit screened), sp_iter (15), sp_starts (4),
         n_random (6), seed (0), refits (2: L2 re-fits per refined
-        start), hops (6: perturbed restarts from the best); the
+        start), relocate (2: rounds of moving one root of L1 across the
+        disk), hops (6: perturbed restarts from the best), screen_samples
+        (2000: the short screening runs use this many leading samples;
+        the refinements use all of them); the
         algorithm page of the documentation explains them. Recursive
         methods: see `RecursiveIdentifier`.
 
@@ -239,6 +243,9 @@ def _oe_options(options):
     opt['refits'] = check_int('refits', opt['refits'], 0)
     opt['max_splits'] = check_int('max_splits', opt['max_splits'], 1)
     opt['hops'] = check_int('hops', opt['hops'], 0)
+    opt['relocate'] = check_int('relocate', opt['relocate'], 0)
+    opt['screen_samples'] = check_int('screen_samples',
+                                      opt['screen_samples'], 100)
     opt['max_iter'] = check_int('max_iter', opt['max_iter'], 1)
     opt['tol'] = check_positive('tol', opt['tol'])
     opt['min_fit'] = float(opt['min_fit'])
@@ -257,20 +264,6 @@ def _integrator_split(k, orders, block):
     i_first = min(k, first)
     i_second = k - i_first
     return (i_first, i_second) if block == 'L1' else (i_second, i_first)
-
-
-def _l1_std(st, phi, u):
-    """Standard deviation of x = L1[u] for the start phi (scaled data, one
-    array or a list of experiments)."""
-    if isinstance(u, list):
-        u = np.concatenate(u)
-    theta = st.theta(phi)
-    na, nb, nc, nd, q1, q2 = st.o
-    a = theta[nc:nc + na]
-    b = theta[nc + na + 4:nc + na + 4 + nb]
-    x = lfilter(np.r_[np.zeros(q1), 1.0, b], np.r_[1.0, a], u)
-    s = float(np.std(x))
-    return s if np.isfinite(s) and s > 0 else 1.0
 
 
 def _identify_oe(u, y, orders, dt, name, integrators, block, progress,
@@ -374,6 +367,11 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
             f"the linear fit of the total orders cannot be split into "
             f"L1 (na = {orders['na']}, nb = {orders['nb']}) and L2 (nc = "
             f"{orders['nc']}, nd = {orders['nd']})")
+    # the screening stages (1, 2) run on the leading `screen_samples`
+    # samples; the refinements (3 on) on all of them
+    heads = {s: (p.st, _head(p.u, opt['screen_samples']),
+                 _head(p.y, opt['screen_samples']))
+             for s, p in probs.items()}
     # stage 1: the linear fit's splits, closed and opened, briefly; when
     # there are many, those whose widest opening fits best (one simulation
     # each; closed, they all have the linear fit's cost)
@@ -381,7 +379,7 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
     for s, phi in starts:
         p = probs[s]
         group = [(s, phi)]
-        width = _l1_std(p.st, phi, p.u)
+        width = l1_std(p.st, phi, p.u)
         for w in opt['widths']:
             opened = phi.copy()
             opened[p.st.im + 2:p.st.im + 4] = w * width
@@ -390,13 +388,14 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
     if len(groups) > opt['max_splits']:
         def widest_cost(group):
             s, phi = group[-1]
-            return probs[s].st.cost(phi, probs[s].u, probs[s].y)
+            return heads[s][0].cost(phi, *heads[s][1:])
         groups = sorted(groups, key=widest_cost)[:opt['max_splits']]
     cands = [c for g in groups for c in g]
     widest = [g[-1] for g in groups]
     bar = _progress(progress, len(cands) + len(widest) + opt['sp_starts']
-                    + opt['n_random'] + 1 + opt['keep'] + opt['hops'])
-    screened = _screen(cands, probs, opt['screen_iter'] // 2, opt, bar)
+                    + opt['n_random'] + 1 + opt['keep'] + opt['relocate']
+                    + opt['hops'])
+    screened = _screen(cands, heads, opt['screen_iter'] // 2, opt, bar)
     # stage 2: starts in other basins, through the series-parallel cost
     # (measured past outputs in L2: smoother, and exact without noise):
     # from every split opened widest, from the best screened starts, from
@@ -410,16 +409,16 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
             _random_start(probs[sign].st, probs[sign].u, rng)))
             for _ in range(opt['n_random'])]
         for s, phi in seeds:
-            p = probs[s]
-            out = lm(p.st, phi, p.u, p.y, opt['sp_iter'], sp=True)
-            if p.st.stable(out['phi']):
+            st, us, ys = heads[s]
+            out = lm(st, phi, us, ys, opt['sp_iter'], sp=True)
+            if st.stable(out['phi']):
                 others.append((s, out['phi']))
             bar.update()
     if not (k or orders['na'] == 0):
         others += _recursive_start(probs[sign], orders)
     bar.update()
     screened = sorted(screened[:opt['keep']]
-                      + _screen(others, probs, opt['screen_iter'], opt, None),
+                      + _screen(others, heads, opt['screen_iter'], opt, None),
                       key=lambda out: out['cost'])
     # stage 3: the best to convergence, each then with L2 re-fitted to the
     # model's own backlash output (a linear OE problem, solved
@@ -441,7 +440,16 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
         if best is None or out['cost'] < best['cost']:
             best = out
         bar.update()
-    # stage 4: hops from the best: perturbed copies refined to
+    # stage 4: relocations of one root of L1 (a pole or zero moved across
+    # the disk, L2 re-fitted): the local optima that differ from a better
+    # one in a single root of L1, which no small perturbation leaves
+    for _ in range(opt['relocate']):
+        moved = _relocate(probs[best['sign']], best, opt)
+        bar.update()
+        if moved is best:
+            break
+        best = moved
+    # stage 5: hops from the best: perturbed copies refined to
     # convergence (kinks of the cost stop LM short of a nearby better
     # minimum, notably with square-wave inputs)
     rng = np.random.default_rng(opt['seed'] + 1)
@@ -501,12 +509,50 @@ def _hop(prob, best, opt, rng, sigma=0.1):
     return out if out['cost'] < best['cost'] else best
 
 
-def _screen(cands, probs, iterations, opt, bar):
-    """A few LM iterations from each (sign, phi); sorted by cost."""
+#: Relocated starts refined to convergence per round.
+RELOCATE_KEEP = 2
+def _head(parts, n):
+    """The leading samples of the experiments, about n in all (each
+    experiment in proportion to its length, at least 50 samples)."""
+    total = sum(part.size for part in parts)
+    if total <= n:
+        return parts
+    return [part[:max(50, int(np.ceil(n * part.size / total)))]
+            for part in parts]
+
+
+def _relocate(prob, best, opt):
+    """One round of root relocations from `best` (see `_moves`): every
+    moved start gets L2 re-fitted and a short run on the leading
+    `screen_samples` samples; the best `RELOCATE_KEEP` are refined to
+    convergence on all the data. Returns the best of them if it lowers
+    the cost, else `best` itself."""
+    st, u, y = prob.st, prob.u, prob.y
+    us, ys = _head(u, opt['screen_samples']), _head(y, opt['screen_samples'])
+    starts = []
+    for phi in relocations(st, best['phi'], us):
+        refit = refit_l2(st, phi, us, ys, opt['max_iter'], opt['tol'])
+        phi = phi if refit is None else refit
+        if st.stable(phi):
+            starts.append(phi)
+    short = sorted((lm(st, phi, us, ys, opt['screen_iter'], opt['tol'])
+                    for phi in starts), key=lambda out: out['cost'])
+    found = best
+    for out in short[:RELOCATE_KEEP]:
+        out = dict(lm(st, out['phi'], u, y, opt['max_iter'], opt['tol']),
+                   sign=best['sign'])
+        if out['cost'] < found['cost'] * (1 - 1e-6):
+            found = out
+    return found
+
+
+def _screen(cands, data, iterations, opt, bar):
+    """A few LM iterations from each (sign, phi) on data[sign] = (st, u,
+    y); sorted by cost."""
     out = []
     for s, phi in cands:
-        p = probs[s]
-        res = lm(p.st, phi, p.u, p.y, iterations, opt['tol'])
+        st, u, y = data[s]
+        res = lm(st, phi, u, y, iterations, opt['tol'])
         res['sign'] = s
         out.append(res)
         if bar is not None:
@@ -535,7 +581,7 @@ def _random_start(st, u, rng):
             np.zeros(0) for n in (st.nc_free, st.na_free, nb, nd)]
     phi = np.concatenate([poly[0], poly[1], [1.0, 1.0, 0.0, 0.0], poly[2],
                           poly[3]])
-    width = _l1_std(st, phi, u)
+    width = l1_std(st, phi, u)
     phi[st.im:st.im + 2] = 1.0 / width
     phi[st.im + 2:st.im + 4] = rng.uniform(0.05, 0.8) * width
     return phi
