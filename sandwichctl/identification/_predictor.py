@@ -327,6 +327,47 @@ def _place_init(pad, init, xs, vs, ys, ymeas=None):
             ymeas[pad - 1 - i] = value
 
 
+@numba.njit(cache=True)
+def _smooth_output_padded(theta, o, u, pad, eps, xs, vs, ys):
+    """`_output_padded` (output error) with the backlash's choice of
+    direction smoothed over |x(k) - x(k-1)| < eps (see `smooth_output`)."""
+    im = _idx(o)[1]
+    m1, m2, D1, D2 = theta[im], theta[im + 1], theta[im + 2], theta[im + 3]
+    for k in range(pad, u.size):
+        x = l1_output(theta, o, u, xs, k)
+        xs[k] = x
+        v_prev = vs[k - 1]
+        rising = max(v_prev, m1 * (x - D1))
+        falling = min(v_prev, m2 * (x + D2))
+        w = min(max(0.5 + 0.5 * (x - xs[k - 1]) / eps, 0.0), 1.0)
+        vs[k] = w * rising + (1.0 - w) * falling
+        ys[k] = l2_output(theta, o, vs, ys, k)
+
+
+def smooth_output(theta, o, u, eps, init=None):
+    r"""Simulated output of a sandwich whose backlash is smoothed (eps > 0).
+
+    Eq. (2.2) reads v(k) = max(v(k-1), m1 (x(k) - D1)) while x rises and
+    min(v(k-1), m2 (x(k) + D2)) while it falls. Where the slope lines
+    cross, the two differ by a finite amount, so the output jumps when a
+    small change of the parameters flips the sign of a tiny x(k) - x(k-1),
+    and the output-error cost is discontinuous. Here the two are blended,
+    weight w = clip(1/2 + (x(k) - x(k-1)) / (2 eps), 0, 1) on the rising
+    one: the output is continuous in the parameters, and eq. (2.2)
+    wherever |x(k) - x(k-1)| >= eps. A path of decreasing eps leads an
+    optimiser across the jumps (see `_smooth`).
+    """
+    pad = padding(o)
+    n = u.size
+    up = np.zeros(pad + n)
+    up[pad:] = u
+    xs, vs, ys = np.zeros(pad + n), np.zeros(pad + n), np.zeros(pad + n)
+    _place_init(pad, init, xs, vs, ys)
+    _smooth_output_padded(np.ascontiguousarray(theta, dtype=float), o, up,
+                          pad, float(eps), xs, vs, ys)
+    return ys[pad:]
+
+
 def oe_output(theta, o, u, init=None):
     """Simulated output y_hat (no sensitivities), from zero state or from
     the past values `init` = (x_past, v_past, y_past) (see `init_sizes`).

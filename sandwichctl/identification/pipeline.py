@@ -32,6 +32,7 @@ import numpy as np
 from ._data import prepare
 from ._nested import splits, refit_l2
 from ._moves import relocations, l1_std
+from ._smooth import smooth_refine
 from ._oe import lm
 from ._predictor import padding, stable_and_finite
 from .batch import Problem, refine as _refine, _progress_range, \
@@ -39,6 +40,7 @@ from .batch import Problem, refine as _refine, _progress_range, \
 from .linear import _fit_oe, oe_transfer_function
 from .recursive import RecursiveIdentifier, DEFAULTS
 from .._checks import (check_int, check_order, check_positive, warn,
+                       check_bool,
                        serial_blas,
                        progress_bar, check_option,
                        ExcitationWarning, SimulationWarning,
@@ -49,8 +51,8 @@ __all__ = ['identify']
 #: Options of method='oe' and their defaults.
 OE_DEFAULTS = dict(widths=(0.05, 0.25), screen_iter=8, keep=3, max_iter=200,
                    tol=1e-10, min_fit=MIN_FIT, sp_iter=15, sp_starts=4,
-                   n_random=6, seed=0, refits=2, max_splits=16, hops=6,
-                   relocate=2, screen_samples=2000)
+                   n_random=6, seed=0, refits=2, max_splits=16, hops=4,
+                   relocate=1, smooth=True, screen_samples=2000)
 
 @serial_blas
 def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
@@ -124,8 +126,9 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         tol (1e-10), min_fit (5, percent), max_splits (16: most pole/zero
         splits of the linear fit screened), sp_iter (15), sp_starts (4),
         n_random (6), seed (0), refits (2: L2 re-fits per refined
-        start), relocate (2: rounds of moving one root of L1 across the
-        disk), hops (6: perturbed restarts from the best), screen_samples
+        start), relocate (1: rounds of moving one root of L1 across the
+        disk), smooth (True: a path through smoothed backlashes), hops
+        (4: perturbed restarts from the best), screen_samples
         (2000: the short screening runs use this many leading samples;
         the refinements use all of them); the
         algorithm page of the documentation explains them. Recursive
@@ -244,6 +247,7 @@ def _oe_options(options):
     opt['max_splits'] = check_int('max_splits', opt['max_splits'], 1)
     opt['hops'] = check_int('hops', opt['hops'], 0)
     opt['relocate'] = check_int('relocate', opt['relocate'], 0)
+    opt['smooth'] = check_bool('smooth', opt['smooth'])
     opt['screen_samples'] = check_int('screen_samples',
                                       opt['screen_samples'], 100)
     opt['max_iter'] = check_int('max_iter', opt['max_iter'], 1)
@@ -394,7 +398,7 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
     widest = [g[-1] for g in groups]
     bar = _progress(progress, len(cands) + len(widest) + opt['sp_starts']
                     + opt['n_random'] + 1 + opt['keep'] + opt['relocate']
-                    + opt['hops'])
+                    + 1 + opt['hops'])
     screened = _screen(cands, heads, opt['screen_iter'] // 2, opt, bar)
     # stage 2: starts in other basins, through the series-parallel cost
     # (measured past outputs in L2: smoother, and exact without noise):
@@ -440,7 +444,17 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
         if best is None or out['cost'] < best['cost']:
             best = out
         bar.update()
-    # stage 4: relocations of one root of L1 (a pole or zero moved across
+    # stage 4: a path of smoothed costs from the best (continuous where
+    # the exact cost jumps: the slope lines of the backlash cross), then
+    # the exact cost again
+    if opt['smooth']:
+        p = probs[best['sign']]
+        out = smooth_refine(p.st, best['phi'], p.u, p.y, opt['max_iter'],
+                            opt['tol'])
+        if out is not None and out['cost'] < best['cost']:
+            best = dict(out, sign=best['sign'])
+    bar.update()
+    # stage 5: relocations of one root of L1 (a pole or zero moved across
     # the disk, L2 re-fitted): the local optima that differ from a better
     # one in a single root of L1, which no small perturbation leaves
     for _ in range(opt['relocate']):
@@ -449,7 +463,7 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
         if moved is best:
             break
         best = moved
-    # stage 5: hops from the best: perturbed copies refined to
+    # stage 6: hops from the best: perturbed copies refined to
     # convergence (kinks of the cost stop LM short of a nearby better
     # minimum, notably with square-wave inputs)
     rng = np.random.default_rng(opt['seed'] + 1)
@@ -511,6 +525,8 @@ def _hop(prob, best, opt, rng, sigma=0.1):
 
 #: Relocated starts refined to convergence per round.
 RELOCATE_KEEP = 2
+#: Iterations of the L2 re-fit of a relocated start (a start only).
+RELOCATE_REFIT_ITER = 20
 def _head(parts, n):
     """The leading samples of the experiments, about n in all (each
     experiment in proportion to its length, at least 50 samples)."""
@@ -531,7 +547,7 @@ def _relocate(prob, best, opt):
     us, ys = _head(u, opt['screen_samples']), _head(y, opt['screen_samples'])
     starts = []
     for phi in relocations(st, best['phi'], us):
-        refit = refit_l2(st, phi, us, ys, opt['max_iter'], opt['tol'])
+        refit = refit_l2(st, phi, us, ys, RELOCATE_REFIT_ITER, opt['tol'])
         phi = phi if refit is None else refit
         if st.stable(phi):
             starts.append(phi)

@@ -1,0 +1,102 @@
+r"""Continuation through a smoothed backlash (private).
+
+Where the slope lines of the backlash cross (m1 != m2 and x beyond
+`Backlash.crossing`), eq. (2.2) follows the rising line while x rises and
+the falling line while it falls, and the two differ there by a finite
+amount. A small change of the parameters that flips the sign of a tiny
+step x(k) - x(k-1) (near a turning point of x, or in the decaying tail of
+a step response) moves v(k), and through the memory zone the samples after
+it, by a finite amount: the output-error cost jumps. On random plants
+whose x spends more than a tenth of the time beyond the crossing the cost
+is riddled with such jumps, and Levenberg-Marquardt stops on a piece of it
+that is a few percent above a neighbouring one.
+
+`smooth_refine` follows a path of smoothed costs (`smooth_output`: the
+rising and falling lines blended over |x(k) - x(k-1)| < eps), continuous
+in the parameters, with eps decreasing from a third of the spread of
+x(k) - x(k-1) to a hundredth, then refines the exact cost from where the
+path ends. The smoothed problems are solved by `scipy.optimize.
+least_squares` (trust-region reflective, bounds m >= 0, D >= 0, forward
+difference Jacobian): they are only a way to a start, the exact
+refinement (`_oe.lm`) decides.
+"""
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from ._oe import lm
+from ._predictor import smooth_output, oe_signals
+
+__all__ = []
+
+#: Smoothing widths, relative to the spread (standard deviation) of the
+#: model's x(k) - x(k-1), from the first smoothed problem to the last.
+EPS_PATH = (0.3, 0.1, 0.03, 0.01)
+#: Function evaluations (not counting the Jacobian's) per smoothed problem.
+SMOOTH_NFEV = 30
+
+
+def _step_spread(st, phi, u):
+    """Spread of x(k) - x(k-1) over the experiments (1 if degenerate)."""
+    theta = st.theta(phi)
+    steps = [np.diff(oe_signals(theta, st.o, uu, st.init(phi, e))[1])
+             for e, uu in enumerate(u)]
+    with np.errstate(all='ignore'):
+        s = float(np.std(np.concatenate(steps)))
+    return s if np.isfinite(s) and s > 0 else 1.0
+
+
+def smooth_refine(st, phi, u, y, max_iter=200, tol=1e-10):
+    """The continuation from phi, then `lm` on the exact cost.
+
+    Parameters
+    ----------
+    st : Structure
+    phi : ndarray
+        An admissible start (model parameters, then output offsets and
+        initial conditions as `st` lays them out; the initial conditions
+        are held).
+    u, y : list of ndarray
+        The scaled experiments.
+
+    Returns
+    -------
+    dict or None
+        The `lm` output from where the path ends, or None when the path
+        leaves the admissible set (a free denominator not strictly stable)
+        or gives no finite values.
+    """
+    free = st.q + st.n_off
+    lo = np.full(free, -np.inf)
+    lo[st.im:st.im + 4] = 0.0
+    spread = _step_spread(st, phi, u)
+    fallback = np.full(sum(part.size for part in u), 1e3)
+
+    def residuals(p, eps):
+        trial = phi.copy()
+        trial[:free] = p
+        if not st.poles_stable(trial):
+            return fallback
+        theta = st.theta(trial)
+        off = st._offsets(trial, len(u))
+        with np.errstate(all='ignore'):
+            r = np.concatenate([
+                yy - smooth_output(theta, st.o, uu, eps, st.init(trial, e))
+                - c for e, (uu, yy, c) in enumerate(zip(u, y, off))])
+        return r if np.all(np.isfinite(r)) else fallback
+
+    p = np.maximum(phi[:free], lo + 1e-12)
+    for rel in EPS_PATH:
+        try:
+            fit = least_squares(residuals, p, bounds=(lo, np.inf),
+                                args=(rel * spread,), max_nfev=SMOOTH_NFEV,
+                                x_scale='jac')
+        except (ValueError, np.linalg.LinAlgError):
+            return None
+        p = fit.x
+    start = phi.copy()
+    start[:free] = p
+    start = st.clip(start, 1e-9)
+    if not st.stable(start):
+        return None
+    return lm(st, start, u, y, max_iter, tol)
