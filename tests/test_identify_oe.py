@@ -156,6 +156,34 @@ def test_recursive_method_with_unstable_estimate_is_not_a_success():
     assert 'unstable' in res.message
 
 
+def test_a_zero_on_the_search_bound_is_not_a_success():
+    """A zero pressed against |z| = zero_radius marks a degenerate optimum
+    (the zero trades against the slope and the width): success=False,
+    and the message says which block; the same model a little inside is
+    judged normally."""
+    from sandwichctl.identification._oe import lm
+    from sandwichctl.identification.batch import Problem
+    plant = sw.SandwichSystem.from_coefficients(
+        a=[-0.6], b=[0.3, 0.1], c=[-0.5], d=[0.2, 0.05], m1=1.0, m2=1.0,
+        D1=0.1, D2=0.1, dt=1)
+    u = sw.examples.paper_input(800, seed=4)
+    y = plant.simulate(u).outputs
+    prob = Problem(u, y, plant.orders)
+    st = prob.st
+    phi = prob.phi_of_model(plant)
+    verdicts = {}
+    for radius in (st.zero_radius * 0.995, st.zero_radius * 0.5):
+        far = phi.copy()
+        far[st.im + 4] = -radius            # L1: 1 - r q^-1, zero at r
+        out = lm(st, far, prob.u, prob.y, max_iter=0)
+        out['converged'] = True
+        verdicts[radius] = prob.result(out, 'oe')
+    at_bound, inside = verdicts.values()
+    assert not at_bound.success
+    assert 'zero of L1 ended on the search bound' in at_bound.message
+    assert 'search bound' not in inside.message
+
+
 def test_result_shows_the_verdict_at_a_glance(paper_noisy):
     plant, u, y = paper_noisy
     res = sw.identify(u, y, **plant.orders, name='stage')

@@ -155,31 +155,40 @@ def test_relocations_move_one_root_and_keep_the_spread_of_x():
                                    phi[st.im + 2:st.im + 4], rtol=1e-12)
 
 
-@pytest.mark.parametrize('seed', [8, 9, 14])
-def test_a_relocation_leaves_the_valley_of_a_wrong_l1_pole(seed):
-    """Noise-free: with one real pole of L1 reflected to the other side of
-    the origin and L2 re-fitted, Levenberg-Marquardt stalls in a wrong
-    valley; one round of relocations recovers the plant exactly."""
+def test_relocations_leave_the_valley_of_a_wrong_l1_pole():
+    """Noise-free, seeds 0 to 39: one real pole of L1 reflected through
+    the origin and L2 re-fitted. Where Levenberg-Marquardt then stalls in
+    a wrong valley, one round of relocations never raises the cost and
+    recovers the plant exactly in most cases (11 of 17 when written)."""
     from sandwichctl.data import random_case
     from sandwichctl.identification._oe import lm
     from sandwichctl.identification.pipeline import _relocate, _oe_options
-    case = random_case(seed, snr=np.inf, n=1500, input_kind='square+sine')
-    prob = Problem(case.u, case.y, case.orders)
-    st = prob.st
-    truth = prob.phi_of_model(case.plant)
-    roots = np.roots(np.r_[1.0, truth[st.nc_free:st.im]])
-    i = int(np.argmin(np.abs(roots.imag)))
-    roots[i] = -roots[i].real
-    start = truth.copy()
-    start[st.nc_free:st.im] = np.real(np.poly(roots))[1:]
-    refit = refit_l2(st, start, prob.u, prob.y)
-    start = start if refit is None else refit
-    stuck = dict(lm(st, start, prob.u, prob.y, 200), sign=1)
-    energy = 0.5 * float(prob.y[0] @ prob.y[0])
-    assert stuck['cost'] > 1e-3 * energy
-    moved = _relocate(prob, stuck, _oe_options({}))
-    assert moved['cost'] < 1e-12 * energy
-    np.testing.assert_allclose(moved['phi'], truth, atol=1e-6)
+    stuck, recovered = 0, 0
+    for seed in range(40):
+        case = random_case(seed, snr=np.inf, n=1500,
+                           input_kind='square+sine')
+        prob = Problem(case.u, case.y, case.orders)
+        st = prob.st
+        truth = prob.phi_of_model(case.plant)
+        roots = np.roots(np.r_[1.0, truth[st.nc_free:st.im]])
+        real = np.flatnonzero(np.abs(roots.imag) < 1e-9)
+        if real.size == 0:
+            continue
+        roots[real[0]] = -roots[real[0]].real
+        start = truth.copy()
+        start[st.nc_free:st.im] = np.real(np.poly(roots))[1:]
+        refit = refit_l2(st, start, prob.u, prob.y)
+        start = start if refit is None else refit
+        out = dict(lm(st, start, prob.u, prob.y, 200), sign=1)
+        energy = 0.5 * float(prob.y[0] @ prob.y[0])
+        if out['cost'] < 1e-4 * energy:
+            continue                        # the descent got there alone
+        stuck += 1
+        moved = _relocate(prob, out, _oe_options({}))
+        assert moved['cost'] <= out['cost']
+        recovered += moved['cost'] < 1e-12 * energy
+    assert stuck >= 10
+    assert recovered >= stuck / 2
 
 
 def test_screening_uses_the_leading_samples_of_each_experiment():

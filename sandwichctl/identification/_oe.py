@@ -144,6 +144,21 @@ class Structure:
                 self.zero_radius = max(self.zero_radius,
                                        1.5 * float(np.max(np.abs(z))))
 
+    def zeros_at_bound(self, phi, share=0.99):
+        """Blocks ('L1', 'L2') with a zero at |z| >= share * zero_radius:
+        the search pressed it against its bound, the sign of a degenerate
+        optimum (see `ZERO_RADIUS`)."""
+        nb, nd = self.o[1], self.o[3]
+        ib = self.im + 4
+        out = []
+        for name, start, n in (('L1', ib, nb), ('L2', ib + nb, nd)):
+            if n and np.isfinite(self.zero_radius):
+                with np.errstate(all='ignore'):
+                    z = np.roots(np.r_[1.0, phi[start:start + n]])
+                if np.any(np.abs(z) >= share * self.zero_radius):
+                    out.append(name)
+        return out
+
     def bounds(self, phi, m_min):
         """Box for a step d: m + d >= m_min, D + d >= 0."""
         lo = np.full(self.size, -np.inf)

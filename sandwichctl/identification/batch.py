@@ -144,6 +144,14 @@ class Problem:
                             "outside the unit circle)")
         if not out['converged']:
             problems.append("the optimiser did not converge")
+        bound = self.st.zeros_at_bound(phi) if stable else []
+        if bound:
+            problems.append(
+                f"a zero of {' and '.join(bound)} ended on the search bound "
+                f"|z| = {self.st.zero_radius:.3g}: a degenerate optimum, "
+                f"where a zero far outside trades against a vanishing "
+                f"slope and a growing width; other orders or delays may "
+                f"suit these data")
         if not fit > min_fit:
             problems.append(f"the model does not explain the data (fit "
                             f"{fit:.3g} % <= {min_fit:g} %)")

@@ -551,7 +551,7 @@ def _relocate(prob, best, opt):
         phi = phi if refit is None else refit
         if st.stable(phi):
             starts.append(phi)
-    short = sorted((lm(st, phi, us, ys, opt['screen_iter'], opt['tol'])
+    short = sorted((lm(st, phi, us, ys, opt['screen_iter'] // 2, opt['tol'])
                     for phi in starts), key=lambda out: out['cost'])
     found = best
     for out in short[:RELOCATE_KEEP]:
