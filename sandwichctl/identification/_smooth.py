@@ -14,7 +14,7 @@ that is a few percent above a neighbouring one.
 `smooth_refine` follows a path of smoothed costs (`smooth_output`: the
 rising and falling lines blended over |x(k) - x(k-1)| < eps), continuous
 in the parameters, with eps decreasing from a third of the spread of
-x(k) - x(k-1) to a hundredth, then refines the exact cost from where the
+x(k) - x(k-1) to a thousandth, then refines the exact cost from where the
 path ends. The smoothed problems are solved by `scipy.optimize.
 least_squares` (trust-region reflective, bounds m >= 0, D >= 0, forward
 difference Jacobian): they are only a way to a start, the exact
@@ -31,7 +31,7 @@ __all__ = []
 
 #: Smoothing widths, relative to the spread (standard deviation) of the
 #: model's x(k) - x(k-1), from the first smoothed problem to the last.
-EPS_PATH = (0.3, 0.1, 0.03, 0.01)
+EPS_PATH = (0.3, 0.1, 0.03, 0.01, 0.003, 0.001)
 #: Function evaluations (not counting the Jacobian's) per smoothed problem.
 SMOOTH_NFEV = 30
 
