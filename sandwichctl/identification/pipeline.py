@@ -427,7 +427,7 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
     # stage 3: the best to convergence, each then with L2 re-fitted to the
     # model's own backlash output (a linear OE problem, solved
     # near-globally) and refined again while that helps
-    best = None
+    best, finals = None, []
     for out in screened[:opt['keep']]:
         p = probs[out['sign']]
         out = dict(lm(p.st, out['phi'], p.u, p.y, opt['max_iter'],
@@ -441,9 +441,38 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
             # lm never raises the cost, so this refinement is an improvement
             out = dict(lm(p.st, phi, p.u, p.y, opt['max_iter'],
                           opt['tol']), sign=out['sign'])
+        finals.append(out)
         if best is None or out['cost'] < best['cost']:
             best = out
         bar.update()
+    finals_best = best
+    best = _polish(probs, best, opt, bar)
+    if probs[best['sign']].st.zeros_at_bound(best['phi']):
+        # a degenerate valley (a zero pressed against the search bound):
+        # polish the best other converged start as well, and keep the
+        # cheaper of the two
+        for out in sorted(finals, key=lambda out: out['cost']):
+            if out is not finals_best and not probs[
+                    out['sign']].st.zeros_at_bound(out['phi']):
+                other = _polish(probs, out, opt, None)
+                if other['cost'] < best['cost']:
+                    best = other
+                break
+    bar.close()
+    cands += others
+    if best['cost'] > lin['cost'] or not np.isfinite(best['cost']):
+        # the linear model itself, as a sandwich with a closed backlash:
+        # a sandwich fit is never worse than the linear fit it nests
+        best = _linear_as_sandwich(probs[sign], lin, extend)
+    best['n_starts'] = len(cands)
+    return probs[best['sign']], best, linear
+
+
+def _polish(probs, best, opt, bar):
+    """Stages 4 to 6 of `_fit_sandwich` from `best`: the smoothed path,
+    the relocations and the hops; each keeps only what lowers the cost.
+    `bar` (or None) counts them."""
+    tick = bar.update if bar is not None else (lambda: None)
     # stage 4: a path of smoothed costs from the best (continuous where
     # the exact cost jumps: the slope lines of the backlash cross), then
     # the exact cost again
@@ -453,13 +482,13 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
                             opt['tol'])
         if out is not None and out['cost'] < best['cost']:
             best = dict(out, sign=best['sign'])
-    bar.update()
+    tick()
     # stage 5: relocations of one root of L1 (a pole or zero moved across
     # the disk, L2 re-fitted): the local optima that differ from a better
     # one in a single root of L1, which no small perturbation leaves
     for _ in range(opt['relocate']):
         moved = _relocate(probs[best['sign']], best, opt)
-        bar.update()
+        tick()
         if moved is best:
             break
         best = moved
@@ -469,15 +498,8 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
     rng = np.random.default_rng(opt['seed'] + 1)
     for _ in range(opt['hops']):
         best = _hop(probs[best['sign']], best, opt, rng)
-        bar.update()
-    bar.close()
-    cands += others
-    if best['cost'] > lin['cost'] or not np.isfinite(best['cost']):
-        # the linear model itself, as a sandwich with a closed backlash:
-        # a sandwich fit is never worse than the linear fit it nests
-        best = _linear_as_sandwich(probs[sign], lin, extend)
-    best['n_starts'] = len(cands)
-    return probs[best['sign']], best, linear
+        tick()
+    return best
 
 
 def _linear_as_sandwich(prob, lin, extend):
