@@ -10,12 +10,17 @@ the linear model that the sandwich nests:
    complex pairs together; each assignment, with m1 = m2 = the linear
    gain and D1 = D2 = 0, is a sandwich with exactly the linear fit.
 3. From each, the backlash is opened from a few small widths (and kept
-   closed); short Levenberg-Marquardt runs screen the starts and the best
-   ones are refined to convergence.
-4. Every accepted step lowers the cost, and the closed starts begin at the
+   closed); with series-parallel and random starts, short
+   Levenberg-Marquardt runs on the leading samples screen them and the
+   best ones are refined to convergence on all the data.
+4. The best is polished: a path through smoothed backlashes (`_smooth`:
+   where the slope lines cross, the exact cost jumps), relocations of one
+   root of L1 (`_moves`) and perturbed restarts; a best that ends with a
+   zero on the search bound is retried from the next converged start.
+5. Every accepted step lowers the cost, and the closed starts begin at the
    linear cost, so the sandwich never ends worse than the linear model.
-   The verdict (``success``) checks stability, convergence and that the
-   model explains the data.
+   The verdict (``success``) checks stability, convergence, no zero on
+   the search bound and that the model explains the data.
 
 The paper's recursive methods (``'bundle'``, ``'gradient'``) and the
 recursive prediction-error estimator (``'rpem'``) run through
