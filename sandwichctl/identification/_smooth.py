@@ -33,7 +33,7 @@ __all__ = []
 #: model's x(k) - x(k-1), from the first smoothed problem to the last.
 EPS_PATH = (0.3, 0.1, 0.03, 0.01, 0.003, 0.001)
 #: Function evaluations (not counting the Jacobian's) per smoothed problem.
-SMOOTH_NFEV = 30
+SMOOTH_NFEV = 20
 
 
 def _step_spread(st, phi, u):
