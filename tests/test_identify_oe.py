@@ -220,3 +220,20 @@ def test_a_degenerate_best_start_is_retried_from_the_next_one():
     assert not prob.st.zeros_at_bound(prob.phi_of_model(res.model))
     yhat = res.model.simulate(case.u).outputs
     assert np.max(np.abs(yhat - case.y)) < 1e-6 * np.std(case.y)
+
+
+def test_the_result_says_how_much_of_x_lies_beyond_the_crossing():
+    """The crossing of the slope lines in u's units and the share of
+    samples beyond it; printed when it is a tenth or more."""
+    import control as ct
+    case = random_case(3, snr=np.inf, n=1500, input_kind='square+sine')
+    res = sw.identify(case.u, case.y, **case.orders)
+    bl = res.model.backlash
+    assert res.crossing['x'] == pytest.approx(bl.crossing, rel=1e-9)
+    x = ct.forced_response(res.model.L1, U=case.u).outputs
+    beyond = x < bl.crossing if bl.m1 < bl.m2 else x > bl.crossing
+    assert res.crossing['share'] == pytest.approx(np.mean(beyond), abs=2e-3)
+    assert res.crossing['share'] >= 0.1
+    assert 'beyond the crossing' in str(res)
+    res.crossing = dict(res.crossing, share=0.05)
+    assert 'beyond the crossing' not in str(res)

@@ -47,6 +47,7 @@ import time
 import numpy as np
 
 from ._oe import Structure, lm
+from ._predictor import oe_signals
 from .result import IdentificationResult, backlash_significance, whiteness
 from ..model.sandwich import SandwichSystem
 from ._data import prepare, scale as _scale
@@ -190,9 +191,27 @@ class Problem:
                  'y_past': self.sign * self.sy * yy}
                 for x, v, yy in (self.st.init(phi, e)
                                  for e in range(self.st.n_inits))]
+        res.crossing = self._crossing(phi)
         if extra:
             res.update(extra)
         return res
+
+    def _crossing(self, phi):
+        """Where the model's slope lines cross and how much of the record
+        its x spends beyond: {'x': crossing in u's units (None if m1 ==
+        m2), 'share': fraction of the samples}."""
+        theta = self.st.theta(phi)
+        im = self.st.im_theta
+        m1, m2, D1, D2 = theta[im:im + 4]
+        if not (np.all(np.isfinite(theta)) and m1 != m2):
+            return {'x': None, 'share': 0.0}
+        cross = (m1 * D1 + m2 * D2) / (m1 - m2)
+        with np.errstate(all='ignore'):
+            x = np.concatenate([oe_signals(theta, self.st.o, uu,
+                                           self.st.init(phi, e))[1]
+                                for e, uu in enumerate(self.u)])
+            beyond = x < cross if m1 < m2 else x > cross
+        return {'x': float(cross * self.su), 'share': float(np.mean(beyond))}
 
 
 def _perturb(st, phi, rng, spread, m_min):

@@ -12,6 +12,10 @@ from scipy.optimize import OptimizeResult
 
 __all__ = ['IdentificationResult', 'parameter_error']
 
+#: `print(res)` mentions the crossing of the slope lines when the model's
+#: x spends at least this share of the samples beyond it.
+CROSSING_NOTE = 0.1
+
 
 def parameter_error(theta_hat, theta_true):
     """Normalised parameter error ||theta_hat - theta|| / ||theta||.
@@ -136,13 +140,15 @@ class IdentificationResult(OptimizeResult):
     method, options, orders, theta0, nit, elapsed
         The method, its options, the orders, the start, the number of
         samples or iterations, and the wall time in seconds.
-    fit, cost, std, linear, significance, whiteness
+    fit, cost, std, linear, significance, whiteness, crossing
         Batch methods only: the fit (percent, as MATLAB's ``compare``) and
         output-error cost on the estimation data, the parameters'
         standard errors, the linear output-error baseline of the same
         total orders (a dict with ``fit``, ``cost``, ``model``), the
-        backlash's F-test against it (`backlash_significance`) and the
-        residual whiteness summary (`whiteness`).
+        backlash's F-test against it (`backlash_significance`), the
+        residual whiteness summary (`whiteness`), and where the model's
+        slope lines cross with the share of samples its x spends beyond
+        (``{'x': ..., 'share': ...}``; printed from 10%).
     """
 
     def __repr__(self):
@@ -172,6 +178,14 @@ class IdentificationResult(OptimizeResult):
             lines.append(f"  residuals: {white['outside']} of "
                          f"{white['lags']} autocorrelation lags outside the "
                          f"99% band (Ljung-Box p = {white['p_value']:.2g})")
+        cross = getattr(self, 'crossing', None)
+        if cross and cross['share'] >= CROSSING_NOTE:
+            lines.append(
+                f"  x is beyond the crossing of the slope lines (x = "
+                f"{cross['x']:.4g}) in {cross['share']:.0%} of the samples: "
+                f"eq. (2.2) switches lines with the direction of x there, "
+                f"the output-error cost jumps and the search is least "
+                f"certain (see the algorithm page)")
         std = getattr(self, 'std', None)
         if std is None:
             lines.append('  theta: ' + ', '.join(
