@@ -162,7 +162,9 @@ def test_relocations_leave_the_valley_of_a_wrong_l1_pole():
     recovers the plant exactly in most cases (11 of 17 when written)."""
     from sandwichctl.data import random_case
     from sandwichctl.identification._oe import lm
-    from sandwichctl.identification.pipeline import _relocate, _oe_options
+    from sandwichctl.identification.pipeline import (_relocate, _oe_options,
+                                                      _head)
+    opt = _oe_options({})
     stuck, recovered = 0, 0
     for seed in range(40):
         case = random_case(seed, snr=np.inf, n=1500,
@@ -184,7 +186,9 @@ def test_relocations_leave_the_valley_of_a_wrong_l1_pole():
         if out['cost'] < 1e-4 * energy:
             continue                        # the descent got there alone
         stuck += 1
-        moved = _relocate(prob, out, _oe_options({}))
+        head = (st, _head(prob.u, opt['screen_samples']),
+                _head(prob.y, opt['screen_samples']))
+        moved = _relocate(prob, head, out, opt)
         assert moved['cost'] <= out['cost']
         recovered += moved['cost'] < 1e-12 * energy
     assert stuck >= 10

@@ -22,7 +22,7 @@ kinks of the cost (see `refine`).
 import numpy as np
 
 from ._predictor import (simulate_with_sensitivities, oe_output, sp_output,
-                         is_stable, init_sizes)
+                         smooth_output, is_stable, init_sizes)
 from ._qp import box_qp, QPError
 
 __all__ = []
@@ -199,22 +199,32 @@ class Structure:
             raise ValueError(f"{self.n_off} offsets for {n_exp} experiments")
         return phi[self.q:] if self.n_off else np.zeros(n_exp)
 
-    def cost(self, phi, u, y, sp=False):
-        """Output-error cost 0.5 * sum(r^2) over the experiments (lists u
-        and y; inf if not finite); with ``sp`` the series-parallel
-        prediction error instead."""
+    def residuals(self, phi, u, y, sp=False, eps=0.0):
+        """Output errors over the experiments (lists u and y), stacked;
+        with ``sp`` the series-parallel prediction errors, with eps > 0
+        those of the smoothed backlash (`smooth_output`)."""
         theta = self.theta(phi)
         off = self._offsets(phi, len(u))
         with np.errstate(all='ignore'):
             if sp:
-                r = np.concatenate([
+                return np.concatenate([
                     yy - c - sp_output(theta, self.o, uu, yy - c,
                                        self.init(phi, e))
                     for e, (uu, yy, c) in enumerate(zip(u, y, off))])
-            else:
-                r = np.concatenate([
-                    yy - oe_output(theta, self.o, uu, self.init(phi, e)) - c
+            if eps > 0:
+                return np.concatenate([
+                    yy - smooth_output(theta, self.o, uu, eps,
+                                       self.init(phi, e)) - c
                     for e, (uu, yy, c) in enumerate(zip(u, y, off))])
+            return np.concatenate([
+                yy - oe_output(theta, self.o, uu, self.init(phi, e)) - c
+                for e, (uu, yy, c) in enumerate(zip(u, y, off))])
+
+    def cost(self, phi, u, y, sp=False):
+        """Output-error cost 0.5 * sum(r^2) over the experiments (lists u
+        and y; inf if not finite); with ``sp`` the series-parallel
+        prediction error instead."""
+        r = self.residuals(phi, u, y, sp)
         with np.errstate(all='ignore'):
             c = 0.5 * float(r @ r)
         return c if np.isfinite(c) else np.inf

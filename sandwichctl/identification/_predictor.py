@@ -288,17 +288,30 @@ def sp_simulate(theta, o, u, ymeas, pad, xs, vs, zs, ys, Sx, Sv, Sy):
              False)
 
 
+@numba.njit(cache=True, inline='always')
+def _smoothed_step(x, x_prev, v_prev, m1, m2, D1, D2, eps):
+    """Eq. (2.2) with its choice of line smoothed (see `smooth_output`)."""
+    rising = max(v_prev, m1 * (x - D1))
+    falling = min(v_prev, m2 * (x + D2))
+    w = min(max(0.5 + 0.5 * (x - x_prev) / eps, 0.0), 1.0)
+    return w * rising + (1.0 - w) * falling
+
+
 @numba.njit(cache=True)
-def _output_padded(theta, o, u, past, pad, xs, vs, ys):
+def _output_padded(theta, o, u, past, pad, xs, vs, ys, eps):
     """The recursion without derivatives; L2's past outputs are read from
     `past`: ys itself (output error) or the measured ones
-    (series-parallel)."""
+    (series-parallel). With eps > 0 the backlash is smoothed
+    (`smooth_output`)."""
     im = _idx(o)[1]
     m1, m2, D1, D2 = theta[im], theta[im + 1], theta[im + 2], theta[im + 3]
     for k in range(pad, u.size):
         x = l1_output(theta, o, u, xs, k)
         xs[k] = x
-        v, _ = backlash_step(x, xs[k - 1], vs[k - 1], m1, m2, D1, D2)
+        if eps > 0.0:
+            v = _smoothed_step(x, xs[k - 1], vs[k - 1], m1, m2, D1, D2, eps)
+        else:
+            v, _ = backlash_step(x, xs[k - 1], vs[k - 1], m1, m2, D1, D2)
         vs[k] = v
         ys[k] = l2_output(theta, o, vs, past, k)
 
@@ -327,23 +340,6 @@ def _place_init(pad, init, xs, vs, ys, ymeas=None):
             ymeas[pad - 1 - i] = value
 
 
-@numba.njit(cache=True)
-def _smooth_output_padded(theta, o, u, pad, eps, xs, vs, ys):
-    """`_output_padded` (output error) with the backlash's choice of
-    direction smoothed over |x(k) - x(k-1)| < eps (see `smooth_output`)."""
-    im = _idx(o)[1]
-    m1, m2, D1, D2 = theta[im], theta[im + 1], theta[im + 2], theta[im + 3]
-    for k in range(pad, u.size):
-        x = l1_output(theta, o, u, xs, k)
-        xs[k] = x
-        v_prev = vs[k - 1]
-        rising = max(v_prev, m1 * (x - D1))
-        falling = min(v_prev, m2 * (x + D2))
-        w = min(max(0.5 + 0.5 * (x - xs[k - 1]) / eps, 0.0), 1.0)
-        vs[k] = w * rising + (1.0 - w) * falling
-        ys[k] = l2_output(theta, o, vs, ys, k)
-
-
 def smooth_output(theta, o, u, eps, init=None):
     r"""Simulated output of a sandwich whose backlash is smoothed (eps > 0).
 
@@ -357,15 +353,7 @@ def smooth_output(theta, o, u, eps, init=None):
     wherever |x(k) - x(k-1)| >= eps. A path of decreasing eps leads an
     optimiser across the jumps (see `_smooth`).
     """
-    pad = padding(o)
-    n = u.size
-    up = np.zeros(pad + n)
-    up[pad:] = u
-    xs, vs, ys = np.zeros(pad + n), np.zeros(pad + n), np.zeros(pad + n)
-    _place_init(pad, init, xs, vs, ys)
-    _smooth_output_padded(np.ascontiguousarray(theta, dtype=float), o, up,
-                          pad, float(eps), xs, vs, ys)
-    return ys[pad:]
+    return oe_signals(theta, o, u, init, eps=eps)[0]
 
 
 def oe_output(theta, o, u, init=None):
@@ -384,9 +372,10 @@ def sp_output(theta, o, u, ymeas, init=None):
     return oe_signals(theta, o, u, init, ymeas)[0]
 
 
-def oe_signals(theta, o, u, init=None, ymeas=None):
+def oe_signals(theta, o, u, init=None, ymeas=None, eps=0.0):
     """`oe_output`'s y_hat with the intermediate signals: (y, x, v); with
-    `ymeas`, the series-parallel prediction's."""
+    `ymeas`, the series-parallel prediction's; with eps > 0, those of the
+    smoothed backlash (`smooth_output`)."""
     pad = padding(o)
     n = u.size
     up = np.zeros(pad + n)
@@ -399,7 +388,7 @@ def oe_signals(theta, o, u, init=None, ymeas=None):
         past[pad:] = ymeas
     _place_init(pad, init, xs, vs, ys, None if ymeas is None else past)
     _output_padded(np.ascontiguousarray(theta, dtype=float), o, up, past,
-                   pad, xs, vs, ys)
+                   pad, xs, vs, ys, float(eps))
     return ys[pad:], xs[pad:], vs[pad:]
 
 

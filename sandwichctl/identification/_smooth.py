@@ -11,7 +11,7 @@ whose x spends more than a tenth of the time beyond the crossing the cost
 is riddled with such jumps, and Levenberg-Marquardt stops on a piece of it
 that is a few percent above a neighbouring one.
 
-`smooth_refine` follows a path of smoothed costs (`smooth_output`: the
+`smooth_refine` follows a path of smoothed costs (`_predictor.smooth_output`: the
 rising and falling lines blended over |x(k) - x(k-1)| < eps), continuous
 in the parameters, with eps decreasing from a third of the spread of
 x(k) - x(k-1) to a thousandth, then refines the exact cost from where the
@@ -25,7 +25,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ._oe import lm
-from ._predictor import smooth_output, oe_signals
+from ._predictor import oe_signals
 
 __all__ = []
 
@@ -77,12 +77,7 @@ def smooth_refine(st, phi, u, y, max_iter=200, tol=1e-10):
         trial[:free] = p
         if not st.poles_stable(trial):
             return fallback
-        theta = st.theta(trial)
-        off = st._offsets(trial, len(u))
-        with np.errstate(all='ignore'):
-            r = np.concatenate([
-                yy - smooth_output(theta, st.o, uu, eps, st.init(trial, e))
-                - c for e, (uu, yy, c) in enumerate(zip(u, y, off))])
+        r = st.residuals(trial, u, y, eps=eps)
         return r if np.all(np.isfinite(r)) else fallback
 
     p = np.maximum(phi[:free], lo + 1e-12)

@@ -191,27 +191,25 @@ class Problem:
                  'y_past': self.sign * self.sy * yy}
                 for x, v, yy in (self.st.init(phi, e)
                                  for e in range(self.st.n_inits))]
-        res.crossing = self._crossing(phi)
+        res.crossing = self._crossing(phi, res.model.backlash)
         if extra:
             res.update(extra)
         return res
 
-    def _crossing(self, phi):
-        """Where the model's slope lines cross and how much of the record
-        its x spends beyond: {'x': crossing in u's units (None if m1 ==
-        m2), 'share': fraction of the samples}."""
-        theta = self.st.theta(phi)
-        im = self.st.im_theta
-        m1, m2, D1, D2 = theta[im:im + 4]
-        if not (np.all(np.isfinite(theta)) and m1 != m2):
+    def _crossing(self, phi, backlash):
+        """Where the model's slope lines cross (`Backlash.crossing`, in
+        u's units; None if m1 == m2) and the share of the samples its x
+        spends beyond: {'x': ..., 'share': ...}."""
+        cross = backlash.crossing
+        if cross is None:
             return {'x': None, 'share': 0.0}
-        cross = (m1 * D1 + m2 * D2) / (m1 - m2)
+        theta = self.st.theta(phi)
         with np.errstate(all='ignore'):
-            x = np.concatenate([oe_signals(theta, self.st.o, uu,
-                                           self.st.init(phi, e))[1]
-                                for e, uu in enumerate(self.u)])
-            beyond = x < cross if m1 < m2 else x > cross
-        return {'x': float(cross * self.su), 'share': float(np.mean(beyond))}
+            x = self.su * np.concatenate([
+                oe_signals(theta, self.st.o, uu, self.st.init(phi, e))[1]
+                for e, uu in enumerate(self.u)])
+            beyond = x < cross if backlash.m1 < backlash.m2 else x > cross
+        return {'x': float(cross), 'share': float(np.mean(beyond))}
 
 
 def _perturb(st, phi, rng, spread, m_min):

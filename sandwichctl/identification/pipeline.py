@@ -450,19 +450,19 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
         if best is None or out['cost'] < best['cost']:
             best = out
         bar.update()
-    finals_best = best
-    best = _polish(probs, best, opt, bar)
-    if probs[best['sign']].st.zeros_at_bound(best['phi']):
+    polished = _polish(probs, heads, best, opt, bar)
+    if probs[polished['sign']].st.zeros_at_bound(polished['phi']):
         # a degenerate valley (a zero pressed against the search bound):
-        # polish the best other converged start as well, and keep the
-        # cheaper of the two
-        for out in sorted(finals, key=lambda out: out['cost']):
-            if out is not finals_best and not probs[
-                    out['sign']].st.zeros_at_bound(out['phi']):
-                other = _polish(probs, out, opt, None)
-                if other['cost'] < best['cost']:
-                    best = other
-                break
+        # polish the cheapest other converged start without one as well,
+        # and keep the cheaper of the two
+        rest = [out for out in finals if out is not best and not
+                probs[out['sign']].st.zeros_at_bound(out['phi'])]
+        if rest:
+            other = _polish(probs, heads, min(rest, key=lambda out:
+                                              out['cost']), opt, None)
+            if other['cost'] < polished['cost']:
+                polished = other
+    best = polished
     bar.close()
     cands += others
     if best['cost'] > lin['cost'] or not np.isfinite(best['cost']):
@@ -473,10 +473,11 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
     return probs[best['sign']], best, linear
 
 
-def _polish(probs, best, opt, bar):
+def _polish(probs, heads, best, opt, bar):
     """Stages 4 to 6 of `_fit_sandwich` from `best`: the smoothed path,
-    the relocations and the hops; each keeps only what lowers the cost.
-    `bar` (or None) counts them."""
+    the relocations (screened on `heads`, the leading samples) and the
+    hops; each keeps only what lowers the cost. `bar` (or None) counts
+    them."""
     tick = bar.update if bar is not None else (lambda: None)
     # stage 4: a path of smoothed costs from the best (continuous where
     # the exact cost jumps: the slope lines of the backlash cross), then
@@ -492,7 +493,8 @@ def _polish(probs, best, opt, bar):
     # the disk, L2 re-fitted): the local optima that differ from a better
     # one in a single root of L1, which no small perturbation leaves
     for _ in range(opt['relocate']):
-        moved = _relocate(probs[best['sign']], best, opt)
+        moved = _relocate(probs[best['sign']], heads[best['sign']], best,
+                          opt)
         tick()
         if moved is best:
             break
@@ -554,6 +556,8 @@ def _hop(prob, best, opt, rng, sigma=0.1):
 RELOCATE_KEEP = 2
 #: Iterations of the L2 re-fit of a relocated start (a start only).
 RELOCATE_REFIT_ITER = 20
+
+
 def _head(parts, n):
     """The leading samples of the experiments, about n in all (each
     experiment in proportion to its length, at least 50 samples)."""
@@ -564,14 +568,14 @@ def _head(parts, n):
             for part in parts]
 
 
-def _relocate(prob, best, opt):
+def _relocate(prob, head, best, opt):
     """One round of root relocations from `best` (see `_moves`): every
-    moved start gets L2 re-fitted and a short run on the leading
-    `screen_samples` samples; the best `RELOCATE_KEEP` are refined to
-    convergence on all the data. Returns the best of them if it lowers
-    the cost, else `best` itself."""
+    moved start gets L2 re-fitted and a short run on `head` = (st, u, y),
+    the leading `screen_samples` samples; the best `RELOCATE_KEEP` are
+    refined to convergence on all the data. Returns the best of them if
+    it lowers the cost, else `best` itself."""
     st, u, y = prob.st, prob.u, prob.y
-    us, ys = _head(u, opt['screen_samples']), _head(y, opt['screen_samples'])
+    us, ys = head[1:]
     starts = []
     for phi in relocations(st, best['phi'], us):
         refit = refit_l2(st, phi, us, ys, RELOCATE_REFIT_ITER, opt['tol'])
