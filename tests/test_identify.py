@@ -96,6 +96,29 @@ def test_exact_sensitivities_match_finite_differences(rng):
     assert np.any(np.abs(J[mem]) > 1e-3)
 
 
+@pytest.mark.parametrize('o', [(1, 1, 1, 1, 0, 0), (3, 3, 3, 3, 2, 2),
+                               (2, 0, 3, 1, 1, 2), (3, 2, 1, 3, 0, 2)])
+def test_sensitivity_rings_match_whole_records(rng, o):
+    """`simulate_with_sensitivities` keeps only a ring of past rows for
+    x's and v's sensitivities: the same numbers, bit for bit, as
+    `oe_simulate` over whole-record arrays (the recursive estimators'
+    layout)."""
+    theta = _theta(rng, o)
+    u = rng.normal(0, 1, 500)
+    yhat, J, zones = pr.simulate_with_sensitivities(theta, o, u)
+    pad, n, p = pr.padding(o), u.size, theta.size
+    up = np.zeros(pad + n)
+    up[pad:] = u
+    xs, vs, ys = np.zeros(pad + n), np.zeros(pad + n), np.zeros(pad + n)
+    zs = np.zeros(pad + n, dtype=np.int64)
+    Sx, Sv, Sy = (np.zeros((pad + n, p)) for _ in range(3))
+    pr.oe_simulate(theta, o, up, pad, xs, vs, zs, ys, Sx, Sv, Sy)
+    assert set(np.unique(zones)) == {-1, 0, 1}
+    np.testing.assert_array_equal(yhat, ys[pad:])
+    np.testing.assert_array_equal(J, Sy[pad:])
+    np.testing.assert_array_equal(zones, zs[pad:])
+
+
 def test_bundle_weights_on_simplex_and_descent(rng):
     for n in (2, 4, 6):
         H = rng.normal(0, 1, (n, 5))

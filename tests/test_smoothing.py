@@ -80,7 +80,8 @@ def test_the_smoothing_path_crosses_jumps_where_descent_stalls(seed):
     stalled = lm(st, start, prob.u, prob.y, 200)
     assert stalled['cost'] > 1e-6 * energy
     out = smooth_refine(st, start, prob.u, prob.y)
-    assert out['cost'] < 1e-20 * energy
+    # exact up to the rounding of the scaled data (2**-30, `_data.scaled`)
+    assert out['cost'] < 1e-16 * energy
     np.testing.assert_allclose(out['phi'], truth, atol=1e-7)
 
 

@@ -66,6 +66,37 @@ def scale(x):
     return s if s > 0 else 1.0
 
 
+#: Scaled signals are rounded to multiples of 2**-QUANTUM_BITS (about
+#: 1e-9 of their spread); see `scaled`.
+QUANTUM_BITS = 30
+
+
+def scaled(x, s):
+    """x / s rounded to multiples of 2**-QUANTUM_BITS.
+
+    Data in other units are the same numbers times a factor, up to the
+    rounding of the product; after division by their own scale they
+    differ in the last bits. The output-error cost of a backlash is
+    discontinuous (beyond the crossing of its slope lines the sign of a
+    tiny step of x picks the line), so such differences can steer the
+    search to another local optimum. Rounded to a grid far coarser than
+    that noise and far finer than any measurement, the scaled data, and
+    so the whole search, are the same bits in any units (except for a
+    sample that falls within a few ulps of a grid boundary).
+
+    >>> import numpy as np
+    >>> u = np.random.default_rng(0).standard_normal(1000)
+    >>> a = scaled(u, scale(u))
+    >>> b = scaled(u * 1e-4, scale(u * 1e-4))
+    >>> bool(np.array_equal(a, b))
+    True
+    >>> bool(np.max(np.abs(a - u / scale(u))) < 1e-9)
+    True
+    """
+    q = 2.0 ** QUANTUM_BITS
+    return np.round(np.asarray(x, dtype=float) / s * q) / q
+
+
 def check_varying(name, parts, why):
     """Refuse a signal that is constant over all experiments."""
     x = np.concatenate(parts)

@@ -241,7 +241,8 @@ class Structure:
             with np.errstate(all='ignore'):
                 yhat, J, zones = simulate_with_sensitivities(
                     theta, self.o, uu, yy - off[e] if sp else None, init)
-                J = J @ self.T
+                if self.i1 or self.i2:
+                    J = J @ self.T          # else T is the identity
             cols = [J]
             if self.n_off:
                 ind = np.zeros((uu.size, self.n_off))
@@ -288,7 +289,7 @@ def lm(st, phi, u, y, max_iter=100, tol=1e-10, m_min=1e-9, sp=False,
     mask) holds some parameters at their values. Returns a dict with phi,
     cost, J, r, nit, converged and message.
     """
-    free = np.ones(phi.size, bool) if fixed is None else ~np.asarray(fixed)
+    free = slice(None) if fixed is None else ~np.asarray(fixed)
     r, J, _ = st.jacobian(phi, u, y, sp)
     cost = 0.5 * float(r @ r)
     if not (np.isfinite(cost) and np.all(np.isfinite(J))):

@@ -180,6 +180,9 @@ def oe_steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1, past,
     ia, im, ib, idd = _idx(o)
     m1, m2, D1, D2 = theta[im], theta[im + 1], theta[im + 2], theta[im + 3]
     p = theta.size
+    # Sx and Sv may be rings: row t lives at t % rows (whole records
+    # need only the last few rows of each; see `simulate_with_sensitivities`)
+    rx_n, rv_n = Sx.shape[0], Sv.shape[0]
     # x and v depend only on L1 and the backlash: theta[ia:idd] (a, m1,
     # m2, D1, D2, b). Their other sensitivity columns stay at the zeros
     # the caller's buffers hold, so only these are computed.
@@ -188,12 +191,12 @@ def oe_steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1, past,
         # L1, eq. (2.1); rows are updated whole (contiguous) for speed
         x = l1_output(theta, o, u, xs, k)
         xs[k] = x
-        rx = Sx[k]
+        rx = Sx[k % rx_n]
         for r in range(ia, idd):
             rx[r] = 0.0
         for i in range(1, na + 1):
             ai = theta[ia + i - 1]
-            prev = Sx[k - i]
+            prev = Sx[(k - i) % rx_n]
             for r in range(ia, idd):
                 rx[r] -= ai * prev[r]
             rx[ia + i - 1] -= xs[k - i]
@@ -203,9 +206,9 @@ def oe_steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1, past,
         v, zone = backlash_step(x, xs[k - 1], vs[k - 1], m1, m2, D1, D2)
         vs[k] = v
         zs[k] = zone
-        rv = Sv[k]
+        rv = Sv[k % rv_n]
         if zone == 0:
-            prev = Sv[k - 1]
+            prev = Sv[(k - 1) % rv_n]
             for r in range(ia, idd):
                 rv[r] = prev[r]
         else:
@@ -227,7 +230,7 @@ def oe_steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1, past,
                     ry[r] -= ci * prev[r]
         for j in range(nd + 1):
             dj = 1.0 if j == 0 else theta[idd + j - 1]
-            prev = Sv[k - q2 - j]
+            prev = Sv[(k - q2 - j) % rv_n]
             for r in range(ia, idd):
                 ry[r] += dj * prev[r]
         for i in range(1, nc + 1):
@@ -407,7 +410,10 @@ def simulate_with_sensitivities(theta, o, u, ymeas=None, init=None):
     xs, vs, ys = np.zeros(pad + n), np.zeros(pad + n), np.zeros(pad + n)
     zs = np.zeros(pad + n, dtype=np.int64)
     p = theta.size
-    Sx, Sv, Sy = (np.zeros((pad + n, p)) for _ in range(3))
+    # only the output's sensitivities are returned; those of x and v are
+    # read a few samples back, so rings of `pad` rows hold them
+    Sx, Sv = np.zeros((pad, p)), np.zeros((pad, p))
+    Sy = np.zeros((pad + n, p))
     theta = np.ascontiguousarray(theta, dtype=float)
     if ymeas is None:
         _place_init(pad, init, xs, vs, ys)

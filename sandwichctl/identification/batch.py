@@ -50,7 +50,7 @@ from ._oe import Structure, lm
 from ._predictor import oe_signals
 from .result import IdentificationResult, backlash_significance, whiteness
 from ..model.sandwich import SandwichSystem
-from ._data import prepare, scale as _scale
+from ._data import prepare, scale as _scale, scaled
 from .._checks import (check_int, check_positive, warn, progress_bar,
                        serial_blas,
                        IdentificationWarning)
@@ -93,8 +93,8 @@ class Problem:
         self.su = _scale(np.concatenate(us))
         self.sy = _scale(np.concatenate(ys))
         self.u_user, self.y_user = us, ys
-        self.u = [part / self.su for part in us]
-        self.y = [self.sign * part / self.sy for part in ys]
+        self.u = [scaled(part, self.su) for part in us]
+        self.y = [self.sign * scaled(part, self.sy) for part in ys]
         self.n_samples = sum(part.size for part in us)
         self.dt, self.name = dt, name
         # theta_user = theta_scaled * unit: slopes sy/su, thresholds su
@@ -119,9 +119,13 @@ class Problem:
         phi = out['phi']
         theta = self.st.theta(phi) * self.unit
         n, q = self.n_samples, self.st.size
-        r = self.sign * self.sy * out['r']          # user units
-        cost = 0.5 * float(r @ r)
+        # residuals in the user's units, on the data as given (the search
+        # ran on their rounded scaled copy, see `_data.scaled`)
         y_all = np.concatenate(self.y_user)
+        r = self.sign * self.sy * self.st.residuals(
+            phi, [part / self.su for part in self.u_user],
+            [self.sign * part / self.sy for part in self.y_user])
+        cost = 0.5 * float(r @ r)
         denom = np.linalg.norm(y_all - y_all.mean())
         fit = 100 * (1 - np.linalg.norm(r) / denom) if denom > 0 \
             else -np.inf

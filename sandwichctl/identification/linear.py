@@ -38,7 +38,7 @@ import control as ct
 from scipy.optimize import OptimizeResult
 from scipy.signal import lfilter
 
-from ._data import prepare, scale
+from ._data import prepare, scale, scaled
 from .._checks import check_int, check_positive, check_dt, serial_blas
 
 __all__ = ['identify_linear', 'LinearIdentificationResult']
@@ -97,6 +97,16 @@ def _max_root(fp):
 def _simulate(b, fp, v, nk):
     """yhat = q^-nk B / F' v from zero initial conditions."""
     return _filt(np.concatenate([np.zeros(nk), b]), fp, v)
+
+
+def fit_output(fit, u, nk):
+    """The output of a `_fit_oe` result `fit` (its B, F with the
+    integrators, and offsets) on the inputs `u` (a list of experiments;
+    zero initial conditions)."""
+    u = _segs(u)
+    yhat = _filt(np.concatenate([np.zeros(nk), fit['B']]), fit['F'], u)
+    return yhat + np.concatenate([np.full(part.size, c)
+                                  for part, c in zip(u, fit['offsets'])])
 
 
 def _cost(y, yhat):
@@ -550,7 +560,9 @@ def identify_linear(u, y=None, nb=None, nf=None, nk=1, dt=True,
     y = np.concatenate(ys)
     su = scale(np.concatenate(us))
     sy = scale(y)
-    us, ys = [part / su for part in us], [part / sy for part in ys]
+    exact = [part / su for part in us]
+    us = [scaled(part, su) for part in us]
+    ys = [scaled(part, sy) for part in ys]
 
     out, used, aic, choice = _fit_oe_auto(us, ys, nb, nf, nk, integrators,
                                           max_iter, tol, estimate)
@@ -565,7 +577,9 @@ def identify_linear(u, y=None, nb=None, nf=None, nk=1, dt=True,
     theta = np.concatenate([b, out['theta'][nb:]])
     std = out['std'].copy()
     std[:nb] *= gain
-    yhat = out['yhat'] * sy
+    # the model's output on the data as given (the fit ran on their
+    # rounded scaled copy, see `_data.scaled`)
+    yhat = fit_output(out, exact, nk) * sy
     resid = y - yhat
     cost = 0.5 * (resid @ resid)
     denom = np.linalg.norm(y - y.mean())

@@ -42,7 +42,7 @@ from ._oe import lm
 from ._predictor import padding, stable_and_finite
 from .batch import Problem, refine as _refine, _progress_range, \
     _warn_poorly_determined, _admissible_start, MIN_FIT
-from .linear import _fit_oe, oe_transfer_function
+from .linear import _fit_oe, fit_output, oe_transfer_function
 from .recursive import RecursiveIdentifier, DEFAULTS
 from .._checks import (check_int, check_order, check_positive, warn,
                        check_bool,
@@ -309,6 +309,12 @@ def _identify_oe(u, y, orders, dt, name, integrators, block, progress,
     fits = {k: _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt,
                              name, progress, offsets, inits)
             for k, lin in linears.items()}
+    if len(fits) > 1 and fits[1][1]['cost'] < fits[0][1]['cost']:
+        # the fit without an integrator nests the one with (a pole just
+        # inside z = 1): when it ended worse, it stopped in a poorer
+        # basin, so it restarts from the other one's model
+        fits[0] = _unintegrated(fits[0], fits[1], u, y, orders, block, opt,
+                                dt, name, offsets, inits)
     # several integrator counts: the lower AIC of the sandwich fits
     n = sum(part.size for part in u)
 
@@ -330,6 +336,43 @@ def _identify_oe(u, y, orders, dt, name, integrators, block, progress,
     return res
 
 
+#: Where the integrator of a model goes when it restarts a fit without one.
+UNINTEGRATED_POLE = 0.99
+
+
+def _unintegrated(free, integrating, u, y, orders, block, opt, dt, name,
+                  offsets, inits):
+    """The fit without an integrator, `free` = (problem, best, linear),
+    restarted from the fit with one: its pole at z = 1 moved to
+    `UNINTEGRATED_POLE`, refined and polished (stages 4 to 6 of
+    `_fit_sandwich`); the cheaper of that and `free`."""
+    prob1, best1, _ = integrating
+    prob0, best0, linear0 = free
+    sign = best1['sign']
+    if prob0.sign != sign:
+        prob0 = Problem(u, y, orders, 0, 0, sign, dt, name, offsets, inits)
+    st0, st1 = prob0.st, prob1.st
+    theta = st1.theta(best1['phi'])
+    nc, na = orders['nc'], orders['na']
+    lo, n = (nc, na) if st1.i1 else (0, nc)
+    roots = np.roots(np.r_[1.0, theta[lo:lo + n]])
+    roots[np.argmin(np.abs(roots - 1.0))] = UNINTEGRATED_POLE
+    theta[lo:lo + n] = np.real(np.poly(roots))[1:]
+    phi = st0.phi(theta)
+    phi[st0.q:] = best1['phi'][st1.q:]       # offsets, initial conditions
+    if not st0.stable(phi):
+        return free
+    out = dict(lm(st0, phi, prob0.u, prob0.y, opt['max_iter'], opt['tol']),
+               sign=sign)
+    heads = {sign: (st0, _head(prob0.u, opt['screen_samples']),
+                    _head(prob0.y, opt['screen_samples']))}
+    out = _polish({sign: prob0}, heads, out, opt, None)
+    if not out['cost'] < best0['cost']:
+        return free
+    out['n_starts'] = best0['n_starts'] + 1
+    return prob0, out, linear0
+
+
 def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
                   progress, offsets, inits):
     """The sandwich of `orders` with k integrators, from the linear fit
@@ -341,7 +384,8 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
                            inits)}
     prob = probs[sign]
     y_all = np.concatenate(y)
-    r_lin = y_all - lin['yhat'] * prob.sy
+    r_lin = y_all - prob.sy * fit_output(
+        lin, [part / prob.su for part in prob.u_user], nk_l)
     denom = np.linalg.norm(y_all - y_all.mean())
     linear = {
         'fit': float(100 * (1 - np.linalg.norm(r_lin) / denom)),
