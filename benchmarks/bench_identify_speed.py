@@ -8,7 +8,11 @@ Prints, in one run, the medians of repeated runs of
     the time per sample, which stays flat if the time grows linearly;
 (c) the paper's bundle recursion, ``method='bundle'`` (eta0 = 0.015,
     k1 = 6), in microseconds per sample (target <= 25 us);
-(d) ``sw.refine`` from one start (the true theta + 5 %) on 10,000 samples.
+(d) ``sw.refine`` from one start (the true theta + 5 %) on 10,000 samples;
+(e) the output-error Jacobian (simulation with sensitivities, the inner
+    loop of every refinement) as computed, with rings of past rows for
+    the sensitivities of x and v, against whole-record arrays for them,
+    side by side (the same numbers, bit for bit).
 
 Timings on a shared machine are noisy; each figure is a median, and the
 header says how many BLAS threads numpy may use (OPENBLAS_NUM_THREADS etc.
@@ -110,6 +114,48 @@ def refine_one_start():
                   f'{sw.parameter_error(res.theta, PLANT.theta):.1e}']])
 
 
+def jacobian_rings(repeat=7, calls=100):
+    import numpy as np
+    from sandwichctl.identification import _predictor as pr
+    rows = []
+    for label, plant, n in (('paper plant', PLANT, 10_000),
+                            ('na=nb=nc=nd=3, delays 2', None, 10_000)):
+        if plant is None:
+            o = (3, 3, 3, 3, 2, 2)
+            rng = np.random.default_rng(0)
+            theta = np.concatenate([rng.uniform(-0.3, 0.3, 6),
+                                    [1.2, 0.9, 0.2, 0.3],
+                                    rng.uniform(-0.3, 0.3, 6)])
+        else:
+            o = tuple(ORDERS[k] for k in ('na', 'nb', 'nc', 'nd', 'q1',
+                                          'q2'))
+            theta = np.asarray(PLANT.theta, dtype=float)
+        u = np.random.default_rng(1).standard_normal(n)
+        pad, p = pr.padding(o), theta.size
+
+        def rings():
+            for _ in range(calls):
+                pr.simulate_with_sensitivities(theta, o, u)
+
+        def whole():
+            for _ in range(calls):
+                up = np.zeros(pad + n)
+                up[pad:] = u
+                xs, vs, ys = (np.zeros(pad + n) for _ in range(3))
+                zs = np.zeros(pad + n, dtype=np.int64)
+                Sx, Sv, Sy = (np.zeros((pad + n, p)) for _ in range(3))
+                pr.oe_simulate(theta, o, up, pad, xs, vs, zs, ys, Sx, Sv,
+                               Sy)
+        t_r = median_time(rings, repeat=repeat) / calls
+        t_w = median_time(whole, repeat=repeat) / calls
+        rows.append([label, f'{n:,}', p, f'{t_r * 1e3:.3f} ms',
+                     f'{t_w * 1e3:.3f} ms', f'{t_w / t_r:.2f}'])
+    print("\n(e) the output-error Jacobian, rings against whole-record "
+          "sensitivity arrays (medians)\n")
+    print_table(['plant', 'N', 'parameters', 'rings', 'whole records',
+                 'speed-up'], rows)
+
+
 def main():
     threads = {k: os.environ.get(k, 'unset') for k in
                ('OPENBLAS_NUM_THREADS', 'OMP_NUM_THREADS', 'MKL_NUM_THREADS')}
@@ -120,6 +166,7 @@ def main():
     against_n()
     bundle()
     refine_one_start()
+    jacobian_rings()
 
 
 if __name__ == '__main__':
