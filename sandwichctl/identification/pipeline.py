@@ -55,7 +55,7 @@ __all__ = ['identify']
 
 #: Options of method='oe' and their defaults.
 OE_DEFAULTS = dict(widths=(0.05, 0.25), screen_iter=8, keep=3, max_iter=200,
-                   tol=1e-10, min_fit=MIN_FIT, sp_iter=15, sp_starts=4,
+                   tol=1e-8, min_fit=MIN_FIT, sp_iter=15, sp_starts=4,
                    n_random=6, seed=0, refits=2, max_splits=16, hops=4,
                    relocate=1, smooth=True, screen_samples=2000)
 
@@ -128,7 +128,7 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     **options
         ``'oe'``: widths (relative backlash widths the starts open to,
         default (0.05, 0.25)), screen_iter (8), keep (3), max_iter (200),
-        tol (1e-10), min_fit (5, percent), max_splits (16: most pole/zero
+        tol (1e-8), min_fit (5, percent), max_splits (16: most pole/zero
         splits of the linear fit screened), sp_iter (15), sp_starts (4),
         n_random (6), seed (0), refits (2: L2 re-fits per refined
         start), relocate (1: rounds of moving one root of L1 across the
