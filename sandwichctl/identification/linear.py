@@ -99,14 +99,19 @@ def _simulate(b, fp, v, nk):
     return _filt(np.concatenate([np.zeros(nk), b]), fp, v)
 
 
+def _offsets_signal(parts, offsets):
+    """One constant per experiment, as long as `parts`, concatenated."""
+    return np.concatenate([np.full(part.size, c)
+                           for part, c in zip(parts, offsets)])
+
+
 def fit_output(fit, u, nk):
     """The output of a `_fit_oe` result `fit` (its B, F with the
     integrators, and offsets) on the inputs `u` (a list of experiments;
     zero initial conditions)."""
     u = _segs(u)
-    yhat = _filt(np.concatenate([np.zeros(nk), fit['B']]), fit['F'], u)
-    return yhat + np.concatenate([np.full(part.size, c)
-                                  for part, c in zip(u, fit['offsets'])])
+    return _simulate(fit['B'], fit['F'], u, nk) + _offsets_signal(
+        u, fit['offsets'])
 
 
 def _cost(y, yhat):
@@ -332,8 +337,7 @@ def _fit_oe(u, y, nb, nf, nk, integrators, max_iter=100, tol=1e-10,
         f = np.convolve(f, [1.0, -1.0])
     off = np.array([part.mean() for part in _split(y - yhat, ys)]) \
         if offsets else np.zeros(len(ys))
-    yhat = yhat + np.concatenate([np.full(part.size, c)
-                                  for part, c in zip(ys, off)])
+    yhat = yhat + _offsets_signal(ys, off)
     return dict(B=b.copy(), F=f, Ff=fp.copy(), theta=theta.copy(), std=std,
                 cost=cost, yhat=yhat, offsets=off, nit=nit,
                 converged=bool(converged), message=message)

@@ -364,9 +364,8 @@ def _unintegrated(free, integrating, u, y, orders, block, opt, dt, name,
         return free
     out = dict(lm(st0, phi, prob0.u, prob0.y, opt['max_iter'], opt['tol']),
                sign=sign)
-    heads = {sign: (st0, _head(prob0.u, opt['screen_samples']),
-                    _head(prob0.y, opt['screen_samples']))}
-    out = _polish({sign: prob0}, heads, out, opt, None)
+    probs = {sign: prob0}
+    out = _polish(probs, _heads(probs, opt), out, opt, None)
     if not out['cost'] < best0['cost']:
         return free
     out['n_starts'] = best0['n_starts'] + 1
@@ -422,9 +421,7 @@ def _fit_sandwich(u, y, orders, lin, k, shape, block, opt, dt, name,
             f"{orders['nc']}, nd = {orders['nd']})")
     # the screening stages (1, 2) run on the leading `screen_samples`
     # samples; the refinements (3 on) on all of them
-    heads = {s: (p.st, _head(p.u, opt['screen_samples']),
-                 _head(p.y, opt['screen_samples']))
-             for s, p in probs.items()}
+    heads = _heads(probs, opt)
     # stage 1: the linear fit's splits, closed and opened, briefly; when
     # there are many, those whose widest opening fits best (one simulation
     # each; closed, they all have the linear fit's cost)
@@ -610,6 +607,14 @@ def _head(parts, n):
         return parts
     return [part[:max(50, int(np.ceil(n * part.size / total)))]
             for part in parts]
+
+
+def _heads(probs, opt):
+    """{sign: (structure, u, y)} of each problem's leading
+    `screen_samples` samples (see `_head`)."""
+    n = opt['screen_samples']
+    return {s: (p.st, _head(p.u, n), _head(p.y, n))
+            for s, p in probs.items()}
 
 
 def _relocate(prob, head, best, opt):
