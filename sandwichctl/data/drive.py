@@ -63,7 +63,7 @@ import numpy as np
 from .._checks import (check_int, check_positive, check_nonnegative,
                        check_signal)
 
-__all__ = ['servo_drive', 'drive_reference', 'drive_case', 'DriveCase',
+__all__ = ['servo_drive', 'ServoDrive', 'random_drive', 'drive_reference', 'drive_case', 'DriveCase',
            'DRIVE_PARAMETERS', 'DRIVE_DT']
 
 #: Sample time of the digital controller, in seconds.
@@ -115,73 +115,96 @@ def _params(params):
     return out
 
 
+# The drive's state vector: motor angle [rad] and speed [rad/s], platform
+# position [m] and speed [m/s], the last measured motor angle, and the
+# speed- and position-loop integrators.
+_TH, _W, _P, _VP, _TH_PREV, _I_SPEED, _I_POS = range(7)
+_NSTATE = 7
+
+
 @numba.njit(cache=True)
-def _drive_kernel(ref, position_loop, prm, play, dt, nsub, disturbance,
-                  offset, y, theta_out, torque_out, nut_out, plat_out):
-    """Simulate the drive; fill y and the internal signals."""
+def _drive_measure(state, res, offset):
+    """The linear encoder's reading of the platform position."""
+    return (res * np.round((state[_P] + offset) / res)
+            - res * np.round(offset / res))
+
+
+@numba.njit(cache=True)
+def _drive_step(state, ref, position_loop, prm, play, dt, nsub, disturbance):
+    """Advance the drive by one sample under reference `ref`.
+
+    Runs the digital loops on the sampled motor angle, then integrates the
+    mechanics over the sample with the torque held. Returns the commanded
+    torque after the limit.
+    """
     J, B, T_max, r, M = prm[0], prm[1], prm[2], prm[3], prm[4]
     k, c, Fc, vs, b = prm[5], prm[6], prm[7], prm[8], prm[9]
     Kv, Ti, Kp, Ki_pos = prm[10], prm[11], prm[12], prm[13]
-    q_motor, res = prm[14], prm[15]
+    q_motor = prm[14]
     h = dt / nsub
     g = 0.5 * play
-    th = 0.0        # motor angle [rad]
-    w = 0.0         # motor speed [rad/s]
-    p = 0.0         # platform position [m]
-    vp = 0.0        # platform speed [m/s]
-    th_prev = 0.0
-    i_speed = 0.0   # speed-loop integrator (in rad/s of error)
-    i_pos = 0.0     # position-loop integrator [rad/s]
-    for n in range(ref.size):
-        # sample: measure
-        y[n] = res * np.round((p + offset) / res) - res * np.round(
-            offset / res)
-        theta_out[n] = th
-        nut_out[n] = r * th
-        plat_out[n] = p
-        thm = th if q_motor == 0.0 else q_motor * np.round(th / q_motor)
-        wm = (thm - th_prev) / dt
-        th_prev = thm
-        # control
-        if position_loop:
-            e_pos = ref[n] - thm
-            i_pos += Ki_pos * dt * e_pos
-            w_ref = Kp * e_pos + i_pos
-        else:
-            w_ref = ref[n]
-        e = w_ref - wm
-        i_new = i_speed + dt / Ti * e
-        T = Kv * (e + i_new)
-        if T > T_max:
-            T = T_max
-            if e < 0.0:
-                i_speed = i_new
-        elif T < -T_max:
-            T = -T_max
-            if e > 0.0:
-                i_speed = i_new
-        else:
+    th, w, p, vp = state[_TH], state[_W], state[_P], state[_VP]
+    i_speed, i_pos = state[_I_SPEED], state[_I_POS]
+    thm = th if q_motor == 0.0 else q_motor * np.round(th / q_motor)
+    wm = (thm - state[_TH_PREV]) / dt
+    state[_TH_PREV] = thm
+    # control
+    if position_loop:
+        e_pos = ref - thm
+        i_pos += Ki_pos * dt * e_pos
+        w_ref = Kp * e_pos + i_pos
+    else:
+        w_ref = ref
+    e = w_ref - wm
+    i_new = i_speed + dt / Ti * e
+    T = Kv * (e + i_new)
+    if T > T_max:
+        T = T_max
+        if e < 0.0:
             i_speed = i_new
-        torque_out[n] = T
-        T += disturbance[n]
-        # mechanics over one sample, torque held
-        for _ in range(nsub):
-            delta = r * th - p
-            dv = r * w - vp
-            if delta > g:
-                F = k * (delta - g) + c * dv
-                if F < 0.0:
-                    F = 0.0
-            elif delta < -g:
-                F = k * (delta + g) + c * dv
-                if F > 0.0:
-                    F = 0.0
-            else:
+    elif T < -T_max:
+        T = -T_max
+        if e > 0.0:
+            i_speed = i_new
+    else:
+        i_speed = i_new
+    torque = T
+    T += disturbance
+    # mechanics over one sample, torque held
+    for _ in range(nsub):
+        delta = r * th - p
+        dv = r * w - vp
+        if delta > g:
+            F = k * (delta - g) + c * dv
+            if F < 0.0:
                 F = 0.0
-            w += h * (T - B * w - r * F) / J
-            vp += h * (F - b * vp - Fc * np.tanh(vp / vs)) / M
-            th += h * w
-            p += h * vp
+        elif delta < -g:
+            F = k * (delta + g) + c * dv
+            if F > 0.0:
+                F = 0.0
+        else:
+            F = 0.0
+        w += h * (T - B * w - r * F) / J
+        vp += h * (F - b * vp - Fc * np.tanh(vp / vs)) / M
+        th += h * w
+        p += h * vp
+    state[_TH], state[_W], state[_P], state[_VP] = th, w, p, vp
+    state[_I_SPEED], state[_I_POS] = i_speed, i_pos
+    return torque
+
+
+@numba.njit(cache=True)
+def _drive_kernel(ref, position_loop, prm, play, dt, nsub, disturbance,
+                  offset, y, theta_out, torque_out, nut_out, plat_out):
+    """Simulate the drive from rest; fill y and the internal signals."""
+    state = np.zeros(_NSTATE)
+    for n in range(ref.size):
+        y[n] = _drive_measure(state, prm[15], offset)
+        theta_out[n] = state[_TH]
+        nut_out[n] = prm[3] * state[_TH]
+        plat_out[n] = state[_P]
+        torque_out[n] = _drive_step(state, ref[n], position_loop, prm, play,
+                                    dt, nsub, disturbance[n])
 
 
 def servo_drive(reference, loop='position', play=200e-6, dt=DRIVE_DT,
@@ -230,22 +253,10 @@ def servo_drive(reference, loop='position', play=200e-6, dt=DRIVE_DT,
     1.59
     """
     u = check_signal('reference', reference)
-    if loop not in _LOOPS:
-        raise ValueError(f"loop must be 'position' or 'speed'; got {loop!r}")
-    play = check_nonnegative('play', play)
-    dt = check_positive('dt', dt)
-    p = _params(params)
-    rng = np.random.default_rng(seed)
-    disturbance = p['torque_noise'] * rng.standard_normal(u.size)
-    offset = rng.uniform(0, p['resolution'])
-    q_motor = 2 * np.pi / p['counts'] if p['counts'] else 0.0
-    prm = np.array([p['J'], p['B'], p['T_max'], p['lead'] / (2 * np.pi),
-                    p['M'], p['k'], p['c'], p['Fc'], p['vs'], p['b'],
-                    p['Kv'], p['Ti'], p['Kp'], p['Ki_pos'], q_motor,
-                    p['resolution']])
+    setup = _setup(loop, play, dt, seed, u.size, params)
     out = [np.empty(u.size) for _ in range(5)]
-    _drive_kernel(u, loop == 'position', prm, play, dt, p['substeps'],
-                  disturbance, offset, *out)
+    _drive_kernel(u, setup.position_loop, setup.prm, setup.play, setup.dt,
+                  setup.nsub, setup.disturbance, setup.offset, *out)
     y = out[0]
     if not np.all(np.isfinite(y)):
         raise RuntimeError("the servo-drive simulation diverged; reduce the "
@@ -253,6 +264,129 @@ def servo_drive(reference, loop='position', play=200e-6, dt=DRIVE_DT,
     if internal:
         return y, dict(zip(('theta', 'torque', 'nut', 'platform'), out[1:]))
     return y
+
+
+@dataclass(frozen=True)
+class _Setup:
+    position_loop: bool
+    prm: np.ndarray
+    play: float
+    dt: float
+    nsub: int
+    disturbance: np.ndarray
+    offset: float
+    params: dict
+
+
+def _setup(loop, play, dt, seed, n, params):
+    """Checked arguments, kernel parameters and the random draws of a run
+    of n samples (the torque disturbance, then the encoder offset)."""
+    if loop not in _LOOPS:
+        raise ValueError(f"loop must be 'position' or 'speed'; got {loop!r}")
+    play = check_nonnegative('play', play)
+    dt = check_positive('dt', dt)
+    p = _params(params)
+    rng = np.random.default_rng(seed)
+    disturbance = p['torque_noise'] * rng.standard_normal(n)
+    offset = rng.uniform(0, p['resolution'])
+    q_motor = 2 * np.pi / p['counts'] if p['counts'] else 0.0
+    prm = np.array([p['J'], p['B'], p['T_max'], p['lead'] / (2 * np.pi),
+                    p['M'], p['k'], p['c'], p['Fc'], p['vs'], p['b'],
+                    p['Kv'], p['Ti'], p['Kp'], p['Ki_pos'], q_motor,
+                    p['resolution']])
+    return _Setup(loop == 'position', prm, play, dt, p['substeps'],
+                  disturbance, offset, p)
+
+
+class ServoDrive:
+    """The servo drive of `servo_drive`, one sample at a time.
+
+    For running a controller against the physical simulation: `read`
+    returns the encoder's reading y(k), `apply` holds the reference u(k)
+    for one sample, and `step` does both (``y(k+1) = step(u(k))``), the
+    per-sample protocol of `sandwichctl.closed_loop_response`. Over `n`
+    samples it is bit for bit `servo_drive` with the same arguments: the
+    torque disturbance of n samples and then the encoder offset are drawn
+    from `seed` exactly as there. Stepping past n samples raises.
+
+    Parameters
+    ----------
+    loop, play, dt, seed, **params
+        As for `servo_drive`.
+    n : int, optional
+        Number of samples the disturbance is drawn for (default 100,000).
+
+    Attributes
+    ----------
+    k : int
+        Samples applied since the last `reset`.
+    saturated : int
+        How many of them ran the motor at its torque limit.
+    dt : float
+        Sample time in seconds.
+    params : dict
+        The physical parameters used.
+
+    Examples
+    --------
+    >>> import numpy as np, sandwichctl as sw
+    >>> ref = np.r_[np.zeros(10), np.ones(90)]
+    >>> drive = sw.data.ServoDrive(play=0.0, seed=0, n=ref.size)
+    >>> y = np.array([drive.step(u) for u in ref[:-1]])
+    >>> bool(np.array_equal(np.r_[0.0, y],
+    ...                     sw.data.servo_drive(ref, play=0.0, seed=0)))
+    True
+    """
+
+    def __init__(self, loop='position', play=200e-6, dt=DRIVE_DT, seed=None,
+                 n=100_000, **params):
+        n = check_int('n', n, minimum=1)
+        self._setup = _setup(loop, play, dt, seed, n, params)
+        self.loop = loop
+        self.dt = self._setup.dt
+        self.params = self._setup.params
+        self.reset()
+
+    def reset(self):
+        """Back to rest at k = 0 (the same disturbance sequence again)."""
+        self._state = np.zeros(_NSTATE)
+        self.k = 0
+        self.saturated = 0
+
+    def read(self):
+        """The encoder reading y(k) of the platform position, in metres."""
+        return float(_drive_measure(self._state, self._setup.prm[15],
+                                    self._setup.offset))
+
+    def apply(self, u):
+        """Hold the reference u(k) for one sample (rad or rad/s).
+
+        Returns the commanded motor torque after the limit, in N m.
+        """
+        su = self._setup
+        if self.k >= su.disturbance.size:
+            raise RuntimeError(f"the drive was set up for n = "
+                               f"{su.disturbance.size} samples; make it "
+                               f"with a larger n")
+        u = float(u)
+        if not np.isfinite(u):
+            raise ValueError(f"u must be finite; got {u}")
+        torque = _drive_step(self._state, u, su.position_loop, su.prm,
+                             su.play, su.dt, su.nsub,
+                             su.disturbance[self.k])
+        self.k += 1
+        if abs(torque) >= su.prm[2]:
+            self.saturated += 1
+        return float(torque)
+
+    def step(self, u):
+        """Apply u(k) for one sample and return the next reading y(k+1)."""
+        self.apply(u)
+        return self.read()
+
+    def __repr__(self):
+        return (f"ServoDrive(loop={self.loop!r}, play={self._setup.play:g},"
+                f" dt={self.dt:g}, k={self.k})")
 
 
 def _staircase(n, rng, hold, step, bound, start=0.0):
@@ -333,6 +467,63 @@ def drive_reference(n, loop='position', rng=None, dt=DRIVE_DT):
         k += m
     out += _multisine(n, rng, dt, (0.5, 10.0), 5.0)
     return out - out.mean()
+
+
+def random_drive(seed):
+    """A randomised servo drive: the mechanics, loop and sampling of one
+    seeded draw, for checking methods beyond the default drive.
+
+    What varies (log-uniform unless said): platform mass M 5-60 kg, motor
+    inertia J 0.5-3e-4 kg m^2, Coulomb friction Fc 5-60 N, viscous
+    friction b 50-800 N s/m, contact stiffness k 5e6-5e7 N/m and damping
+    c 1e3-1e4 N s/m, play uniform in 0-300 um (0 in one draw of five),
+    the loop (position or speed, even odds), the speed-loop gain Kv
+    (scaled with the reflected inertia so the speed loop crosses over at
+    100-300 rad/s) and integral time Ti 10-40 ms, the position gain Kp
+    20-60 1/s, the sample time 0.25-2 ms, the linear encoder's resolution
+    0.1-5 um and the torque disturbance 0.5-5e-3 N m.
+
+    Parameters
+    ----------
+    seed : int
+        Seed (>= 0).
+
+    Returns
+    -------
+    dict
+        'loop', 'play' (m), 'dt' (s) and 'params' (overrides of
+        `DRIVE_PARAMETERS`), ready for ``servo_drive(ref, d['loop'],
+        d['play'], d['dt'], **d['params'])`` or `ServoDrive`.
+
+    Examples
+    --------
+    >>> from sandwichctl.data import random_drive
+    >>> d = random_drive(3)
+    >>> sorted(d)
+    ['dt', 'loop', 'params', 'play']
+    >>> random_drive(3) == d
+    True
+    """
+    seed = check_int('seed', seed)
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 0xd71e]))
+
+    def logu(a, b):
+        return float(np.exp(rng.uniform(np.log(a), np.log(b))))
+
+    M, J = logu(5, 60), logu(0.5e-4, 3e-4)
+    lead = DRIVE_PARAMETERS['lead'][0]
+    inertia = J + M * (lead / (2 * np.pi)) ** 2
+    params = dict(M=M, J=J, Fc=logu(5, 60), b=logu(50, 800),
+                  k=logu(5e6, 5e7), c=logu(1e3, 1e4),
+                  Kv=inertia * logu(100, 300), Ti=logu(0.01, 0.04),
+                  Kp=logu(20, 60), resolution=logu(1e-7, 5e-6),
+                  torque_noise=logu(0.5e-3, 5e-3))
+    play = 0.0 if rng.uniform() < 0.2 else float(rng.uniform(0, 300e-6))
+    loop = 'position' if rng.uniform() < 0.5 else 'speed'
+    dt = logu(0.25e-3, 2e-3)
+    # enough sub-steps to resolve the contact frequency sqrt(k/M)
+    params['substeps'] = int(np.ceil(dt * np.sqrt(params['k'] / M) / 0.03))
+    return dict(loop=loop, play=play, dt=dt, params=params)
 
 
 @dataclass(repr=False)

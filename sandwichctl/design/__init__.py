@@ -8,11 +8,17 @@
 - `descfcn`: the backlash's describing function and limit cycles.
 """
 
-from . import inverse, compensator, closedloop, descfcn
+from . import (inverse, compensator, references, servo, loop, closedloop,
+               descfcn)
 from .inverse import *
 from .compensator import *
+from .references import *
+from .servo import *
+from .loop import *
 from .closedloop import *
 from .descfcn import *
 
-__all__ = (inverse.__all__ + compensator.__all__ + closedloop.__all__
+__all__ = (inverse.__all__ + compensator.__all__ + references.__all__
+           + servo.__all__ + loop.__all__
+           + closedloop.__all__
            + descfcn.__all__)

@@ -32,8 +32,11 @@ import control as ct
 from .inverse import causal_inverse, _fmt_roots, _inverse_step
 from .compensator import (SandwichCompensator, sandwich_compensator,
                           linearized_plant, _tf_text, _check_model)
+from .loop import servo_loop, plant_measure, plant_advance
+from .servo import ServoController
+from ._servo_design import frequency_grid, loop_radius, design_pid, pid_tf
+from .references import steps_and_sines
 from ..model._kernel import _ss_output, _ss_update
-from ..model.backlash import backlash_step
 from ..model.sandwich import SandwichSystem, _warn_divergence
 from .._checks import (check_discrete_siso_tf, check_signal, common_dt,
                        check_bool, check_finite, check_int, check_name,
@@ -41,7 +44,7 @@ from .._checks import (check_discrete_siso_tf, check_signal, common_dt,
 
 __all__ = ['TrackingController', 'tracking_controller', 'closed_loop_system',
            'ClosedLoopSystem',
-           'closed_loop_response', 'steps_and_sines', 'CompensationDemo',
+           'closed_loop_response', 'CompensationDemo',
            'closed_loop_demo']
 
 
@@ -199,15 +202,26 @@ def tracking_controller(sys, feedforward=True, modulus_margin=0.6,
     if not 0 < modulus_margin < 1:
         raise ValueError(f"modulus_margin must be in (0, 1); got "
                          f"{modulus_margin!r}")
-    if np.any(np.abs(np.roots(den)) >= 1) if den.size > 1 else False:
+    poles = np.roots(den) if den.size > 1 else np.zeros(0)
+    at_one = np.abs(poles - 1.0) < 1e-6
+    if at_one.sum() == 1 and np.all(np.abs(poles[~at_one]) < 1):
+        # a type-1 plant: the PID of servo_controller's design
+        kp, ki, kd, pole = design_pid(num, den, sys.dt, modulus_margin)
+        C = pid_tf(kp, ki, kd, pole, sys.dt)
+        C = ct.tf(C.num[0][0], C.den[0][0], sys.dt, inputs='e',
+                  outputs='v_fb', name='feedback')
+        return TrackingController(C, *_feedforward(sys, feedforward,
+                                                   approximate),
+                                  sys, kp, ki)
+    if np.any(np.abs(poles) >= 1):
         raise ValueError("sys must be stable (all poles inside the unit "
-                         "circle) for this PI design; got poles "
-                         f"{_fmt_roots(np.roots(den))}")
+                         "circle) or have one integrator for this design; "
+                         f"got poles {_fmt_roots(poles)}")
     g = float(np.polyval(num, 1.0) / np.polyval(den, 1.0))
     if not np.isfinite(g) or g == 0:
         raise ValueError(f"sys must have a finite, non-zero DC gain for "
                          f"integral action; got {g}")
-    w = np.linspace(1e-4, np.pi, 600)
+    w = frequency_grid(den)
     zw = np.exp(1j * w)
     P_w = np.polyval(num, zw) / np.polyval(den, zw)
     num_p = np.concatenate([np.zeros(den.size - num.size), num])
@@ -246,15 +260,21 @@ def tracking_controller(sys, feedforward=True, modulus_margin=0.6,
     kp, ki = kp0 / g, ki0 / g
     C = ct.tf([kp + ki, -kp], [1, -1], sys.dt, inputs='e', outputs='v_fb',
               name='feedback')
-    if feedforward:
-        F = causal_inverse(sys, approximate=approximate, name='feedforward')
-        F = ct.tf(F.num[0][0], F.den[0][0], sys.dt, inputs='r_ahead',
-                  outputs='v_ff',
-                  name='feedforward')
-        preview = den.size - num.size
-    else:
-        F, preview = None, 0
-    return TrackingController(C, F, preview, sys, kp, ki)
+    if loop_radius(num, den, C) >= 1:
+        raise ValueError("the PI design gives an unstable loop; lower "
+                         "modulus_margin or use sw.servo_controller")
+    return TrackingController(C, *_feedforward(sys, feedforward,
+                                               approximate), sys, kp, ki)
+
+
+def _feedforward(sys, feedforward, approximate):
+    """The model-inverse feedforward and its preview (or None, 0)."""
+    if not feedforward:
+        return None, 0
+    F = causal_inverse(sys, approximate=approximate, name='feedforward')
+    F = ct.tf(F.num[0][0], F.den[0][0], sys.dt, inputs='r_ahead',
+              outputs='v_ff', name='feedforward')
+    return F, sys.den[0][0].size - np.trim_zeros(sys.num[0][0], 'f').size
 
 
 def _ss_arrays(sys):
@@ -269,8 +289,7 @@ def _ss_arrays(sys):
 @numba.njit(cache=True)
 def _closed_loop_kernel(r, r_ahead, Af, Bf, Cf, Df, use_ff, Ac, Bc, Cc, Dc,
                         compensate, Ai, Bi, Ci, Di, im1, im2, iD1, iD2, width,
-                        A1, B1, C1, D1, A2, B2, C2, D2, m1, m2, bD1, bD2,
-                        y, u, x, v):
+                        A1, B1, C1, D1, A2, B2, C2, D2, bl, y, u, x, v):
     """Simulate plant, controller and optional compensator from rest."""
     sf = np.zeros(Af.shape[0])
     sc = np.zeros(Ac.shape[0])
@@ -279,16 +298,10 @@ def _closed_loop_kernel(r, r_ahead, Af, Bf, Cf, Df, use_ff, Ac, Bc, Cc, Dc,
     s2 = np.zeros(A2.shape[0])
     wf, wc, wi = np.empty(sf.size), np.empty(sc.size), np.empty(si.size)
     w1, w2 = np.empty(s1.size), np.empty(s2.size)
-    x_prev = v_prev = 0.0          # plant backlash memory
+    mem = np.zeros(4)              # plant backlash memory
     xi_prev = vi_prev = 0.0        # inverse's copy of it
-    x_first = D1[0, 0] == 0.0      # x(k) does not depend on u(k)
     for k in range(r.size):
-        if x_first:
-            xk = _ss_output(A1, B1, C1, D1, s1, 0.0)
-            vk, _ = backlash_step(xk, x_prev, v_prev, m1, m2, bD1, bD2)
-            yk = _ss_output(A2, B2, C2, D2, s2, vk)
-        else:
-            yk = _ss_output(A2, B2, C2, D2, s2, 0.0)
+        yk = plant_measure(A1, B1, C1, D1, A2, B2, C2, D2, s1, s2, mem, bl)
         e = r[k] - yk
         vd = _ss_output(Ac, Bc, Cc, Dc, sc, e)
         _ss_update(Ac, Bc, sc, e, wc)
@@ -303,13 +316,8 @@ def _closed_loop_kernel(r, r_ahead, Af, Bf, Cf, Df, use_ff, Ac, Bc, Cc, Dc,
             _ss_update(Ai, Bi, si, xd, wi)
         else:
             uk = vd
-        if not x_first:
-            xk = _ss_output(A1, B1, C1, D1, s1, uk)
-            vk, _ = backlash_step(xk, x_prev, v_prev, m1, m2, bD1, bD2)
-        _ss_update(A1, B1, s1, uk, w1)
-        _ss_update(A2, B2, s2, vk, w2)
-        x_prev, v_prev = xk, vk
-        y[k], u[k], x[k], v[k] = yk, uk, xk, vk
+        plant_advance(A1, B1, C1, D1, A2, B2, s1, s2, w1, w2, mem, bl, uk)
+        y[k], u[k], x[k], v[k] = yk, uk, mem[2], mem[3]
 
 
 def _check_loop(plant, controller, compensator):
@@ -370,6 +378,8 @@ def closed_loop_response(plant, reference, controller, compensator=None):
     SimulationWarning
         If the loop is unstable and its output overflows.
     """
+    if isinstance(controller, ServoController):
+        return _servo_response(plant, reference, controller, compensator)
     dt = _check_loop(plant, controller, compensator)
     r = check_signal('reference', reference)
     d = controller.preview
@@ -391,8 +401,8 @@ def closed_loop_response(plant, reference, controller, compensator=None):
     _closed_loop_kernel(r, r_ahead, Af, Bf, Cf, Df,
                         controller.feedforward is not None, Ac, Bc, Cc, Dc,
                         compensator is not None, Ai, Bi, Ci, Di, *ipar,
-                        A1, B1, C1, D1, A2, B2, C2, D2, bl.m1, bl.m2,
-                        bl.D1, bl.D2, y, u, x, v)
+                        A1, B1, C1, D1, A2, B2, C2, D2,
+                        np.array([bl.m1, bl.m2, bl.D1, bl.D2]), y, u, x, v)
     step = 1.0 if dt is True else float(dt)
     _warn_divergence(f"the closed loop of {plant.name}", y, u[-1:],
                      step * np.arange(n))
@@ -402,6 +412,40 @@ def closed_loop_response(plant, reference, controller, compensator=None):
         input_labels=['r'], sysname=plant.name,
         title=("Compensated" if compensator is not None else "Uncompensated")
         + f" closed loop of {plant.name}")
+
+
+def _servo_response(plant, reference, ctrl, compensator):
+    """`closed_loop_response` for a `ServoController`."""
+    if compensator is not None:
+        raise ValueError("a ServoController carries its own compensation; "
+                         "pass compensator=None")
+    if isinstance(plant, (SandwichSystem, ct.TransferFunction)):
+        if isinstance(plant, ct.TransferFunction):
+            check_discrete_siso_tf('plant', plant)
+        dt = common_dt('plant', plant.dt, 'controller', ctrl.dt)
+        lag = (plant.orders['q1'] + plant.orders['q2']
+               if isinstance(plant, SandwichSystem)
+               else plant.den[0][0].size - np.trim_zeros(
+                   plant.num[0][0], 'f').size)
+        if lag < 1:
+            raise ValueError("plant must have at least one sample of delay "
+                             "from u to y: without it the loop is algebraic")
+        name = plant.name
+    elif callable(getattr(plant, 'step', None)):
+        dt = ctrl.dt
+        name = type(plant).__name__
+    else:
+        raise TypeError(
+            f"plant must be a SandwichSystem, a discrete TransferFunction or "
+            f"an object with a step(u) -> y method; got "
+            f"{type(plant).__name__}")
+    r = check_signal('reference', reference)
+    y, u = servo_loop(plant, r, ctrl)
+    step = 1.0 if dt is True else float(dt)
+    return ct.TimeResponseData(
+        step * np.arange(r.size), np.vstack([y, u]), None, r,
+        issiso=False, output_labels=['y', 'u'], input_labels=['r'],
+        sysname=name, title=f"Servo loop of {name}")
 
 
 def closed_loop_system(plant, controller, compensator=None, name=None):
@@ -520,52 +564,6 @@ def _rebuild_loop(parts, name, inputs, outputs, states, params):
     loop.set_states(states)
     loop.params = params
     return loop
-
-
-def steps_and_sines(n=1200, levels=(0.0, 1.0, -0.5, 1.5, 0.3),
-                    amplitudes=(0.8, 0.2), periods=(100, 37)):
-    """A tracking reference: a staircase of steps, then a sum of sines.
-
-    The first half of the `n` samples holds each of `levels` in turn for an
-    equal time; the second half is ``sum(a * sin(2 pi k / p))``.
-
-    Parameters
-    ----------
-    n : int, optional
-        Number of samples (default 1200).
-    levels : sequence of float, optional
-        Step levels; start with 0 to begin at rest.
-    amplitudes, periods : sequence of float, optional
-        Sine amplitudes and periods (in samples).
-
-    Returns
-    -------
-    ndarray, shape (n,)
-
-    Examples
-    --------
-    >>> import sandwichctl as sw
-    >>> r = sw.steps_and_sines(20, levels=(0, 1), amplitudes=(1,),
-    ...                        periods=(4,))
-    >>> print(r.round(3))
-    [ 0.  0.  0.  0.  0.  1.  1.  1.  1.  1.  0.  1.  0. -1. -0.  1.  0. -1.
-     -0.  1.]
-    """
-    n = check_int('n', n, minimum=2)
-    levels = check_vector('levels', levels)
-    amplitudes = check_vector('amplitudes', amplitudes)
-    periods = check_vector('periods', periods, amplitudes.size)
-    if np.any(periods <= 0):
-        raise ValueError(f"periods must be > 0 (in samples); got {periods}")
-    half = n // 2
-    r = np.empty(n)
-    edges = np.linspace(0, half, len(levels) + 1).round().astype(int)
-    for lev, a, b in zip(levels, edges[:-1], edges[1:]):
-        r[a:b] = lev
-    k = np.arange(n - half)
-    r[half:] = sum(a * np.sin(2 * np.pi * k / p)
-                   for a, p in zip(amplitudes, periods))
-    return r
 
 
 class CompensationDemo:

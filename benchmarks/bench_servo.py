@@ -1,0 +1,158 @@
+"""Closed loops on the physically simulated servo drive: linear against
+sandwich, both designed by `sw.servo_controller` with its defaults.
+
+For each drive of the family (the default drive in position and speed
+loops with play 0, 12 and 200 um over several seeds, and randomised drives
+of `sw.data.random_drive`), this
+
+1. records 5 s of `drive_reference` excitation and identifies, from that
+   record only, a sandwich (`sw.identify`) and a linear output-error model
+   of the same total orders (`sw.identify_linear`);
+2. designs ``servo_controller(linear result)`` and
+   ``servo_controller(sandwich result)`` with defaults;
+3. runs both, with `sw.closed_loop_response`, against the drive
+   (`sw.data.ServoDrive`, another disturbance seed) for
+   `sw.servo_reference`: S-curve steps with reversals and holds, ramps and
+   a sine; and runs the linear design on the same drive without play
+   (the limit).
+
+It prints, per case and design: RMS and maximum error, the RMS error in
+the 100 ms after each reversal of the reference, the input's total
+variation against the linear design's (chatter), the most reversals of y
+in the second half of a hold (>= 3 is a limit cycle) and the share of
+ticks at the motor's torque limit. With ``--sweep`` it also scales the
+linear feedback on the play-free drive to find the best linear design of
+the sweep.
+
+Run: python benchmarks/bench_servo.py [--seeds 2] [--random 6] [--sweep]
+"""
+
+import argparse
+import os
+import sys
+import time
+import warnings
+
+import numpy as np
+import control as ct
+
+sys.path.insert(0, os.path.dirname(__file__))
+import sandwichctl as sw                                   # noqa: E402
+from _timing import print_table                            # noqa: E402
+
+ORDERS = dict(na=2, nb=1, nc=2, nd=1, q1=1, q2=0)
+LINEAR = dict(nb=3, nf=4, nk=1)
+
+
+def identify(loop, play, dt, params, seed):
+    """Sandwich and linear results from one 5 s estimation record."""
+    n = int(round(5.0 / dt))
+    u = sw.data.drive_reference(n, loop, rng=seed, dt=dt)
+    y = sw.data.servo_drive(u, loop, play, dt, seed=seed + 1000, **params)
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        res = sw.identify(u, y, **ORDERS, dt=dt)
+        lin = sw.identify_linear(u, y, **LINEAR, dt=dt,
+                                 integrators=res.linear['integrators'])
+    return res, lin
+
+
+def run(ctrl, r, loop, play, dt, params, seed):
+    """Closed loop on the drive; the metrics of `sw.servo_metrics`."""
+    drive = sw.data.ServoDrive(loop, play, dt, seed=seed, n=r.size,
+                               **params)
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        out = sw.closed_loop_response(drive, r, ctrl)
+    res = params.get('resolution', sw.data.DRIVE_PARAMETERS['resolution'][0])
+    m = sw.servo_metrics(r, out.outputs[0], out.outputs[1], dt,
+                         deadband=1.5 * res)
+    m['saturation'] = drive.saturated / r.size
+    return m
+
+
+def cases(seeds, randoms, loops):
+    for loop in loops:
+        for seed in range(seeds):
+            for play in (0.0, 12e-6, 200e-6):
+                yield (f"{loop[:3]} s{seed}", loop, play, sw.data.DRIVE_DT,
+                       {}, seed)
+    for seed in range(randoms):
+        d = sw.data.random_drive(seed)
+        yield (f"rnd{seed} {d['loop'][:3]}", d['loop'], d['play'], d['dt'],
+               d['params'], 100 + seed)
+
+
+def scaled(ctrl_lin, factor):
+    """The linear design with its feedback gains scaled (for the sweep)."""
+    return sw.servo_controller(ctrl_lin.model, feedback_scale=factor)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument('--seeds', type=int, default=2)
+    ap.add_argument('--random', type=int, default=6)
+    ap.add_argument('--sweep', action='store_true')
+    ap.add_argument('--loops', default='position,speed')
+    args = ap.parse_args()
+    rows, checks = [], []
+    start = time.perf_counter()
+    for label, loop, play, dt, params, seed in cases(
+            args.seeds, args.random, args.loops.split(',')):
+        res, lin = identify(loop, play, dt, params, seed)
+        r = sw.servo_reference(dt, 1e-3)
+        try:
+            c_lin = sw.servo_controller(lin)
+            c_sw = sw.servo_controller(res)
+        except ValueError as exc:
+            print(f"{label} play {play * 1e6:.0f}: design refused: {exc}")
+            continue
+        m_lin = run(c_lin, r, loop, play, dt, params, seed + 500)
+        m_sw = run(c_sw, r, loop, play, dt, params, seed + 500)
+        m_0 = run(c_lin, r, loop, 0.0, dt, params, seed + 500)
+        best = ''
+        if args.sweep and play == 0.0:
+            sweep = [run(sw.servo_controller(lin, feedback_scale=f), r, loop,
+                         0.0, dt, params, seed + 500)['rms']
+                     for f in (0.25, 0.5, 2.0, 4.0)]
+            best = f"{min(sweep + [m_0['rms']]) * 1e6:.1f}"
+        for name, m in (('linear', m_lin), ('sandwich', m_sw)):
+            rows.append([label, f"{play * 1e6:.0f}", name,
+                         f"{m['rms'] * 1e6:.1f}", f"{m['max'] * 1e6:.0f}",
+                         f"{m['near_reversals'] * 1e6:.1f}",
+                         f"{m['activity'] / m_lin['activity']:.2f}",
+                         m['hunting'], f"{m['saturation']:.1%}",
+                         f"{m_0['rms'] * 1e6:.1f}" if name == 'linear'
+                         else '', best if name == 'linear' else '',
+                         f"{m['rms'] / m_lin['rms']:.2f}"])
+        checks.append(dict(label=label, play=play, lin=m_lin, sw=m_sw,
+                           res=res))
+    print("Servo loops on the simulated drive, servo_controller defaults; "
+          "errors in um\n")
+    print_table(['case', 'play', 'design', 'RMS', 'max', 'near rev.',
+                 'TV/lin', 'hunt', 'sat.', 'no play', 'best swept',
+                 'RMS/lin'], rows)
+    big = [c for c in checks if c['play'] >= 100e-6]
+    ratio = [c['sw']['rms'] / c['lin']['rms'] for c in checks]
+    print(f"\n{len(checks)} drives in {time.perf_counter() - start:.0f} s")
+    print(f"sandwich RMS / linear: median {np.median(ratio):.2f}, worst "
+          f"{max(ratio):.2f} (target <= 1.05)")
+    near = [c['sw']['near_reversals'] / c['lin']['near_reversals']
+            for c in checks]
+    print(f"sandwich near-reversal error / linear: median "
+          f"{np.median(near):.2f}, worst {max(near):.2f} (target <= 1)")
+    print(f"hunting (>= 3 reversals in a hold): linear "
+          f"{sum(c['lin']['hunting'] >= 3 for c in checks)}, sandwich "
+          f"{sum(c['sw']['hunting'] >= 3 for c in checks)} of {len(checks)}")
+    act = [c['sw']['activity'] / c['lin']['activity'] for c in checks]
+    print(f"input activity / linear: worst {max(act):.2f} (target <= 3); "
+          f"saturation worst {max(c['sw']['saturation'] for c in checks):.1%}"
+          f" (target <= 1 %)")
+    if big:
+        rb = [c['sw']['rms'] / c['lin']['rms'] for c in big]
+        print(f"large play (>= 100 um), {len(big)} drives: RMS ratio median "
+              f"{np.median(rb):.2f} (goal <= 0.75)")
+
+
+if __name__ == '__main__':
+    main()

@@ -1,0 +1,233 @@
+r"""The design steps behind `servo_controller`: preview inverses, the PID
+gains, and the checks of the loop they give.
+
+Preview inverse
+---------------
+A plant :math:`G = b\,N_s(z) N_u(z) / A(z)` with its zeros split into the
+stable ones :math:`N_s` and those on or outside the unit circle
+:math:`N_u` is inverted as
+
+.. math::
+
+    F(z) = z^{-d} \frac{A(z)}{b\,N_s(z)}\, Q(z),
+
+where Q is the inverse of :math:`N_u`: with ``'preview'``, the
+anticausal series :math:`1/(z - z_j) = -\sum_{i \ge 0} z^i / z_j^{i+1}`
+truncated where :math:`|z_j|^{-i}` falls below 1e-3 (a preview of that
+many samples), scaled for a unit DC gain of :math:`N_u Q`. Zeros with a
+real part below -0.5 (which would make the inverse ring at the Nyquist
+frequency) are counted in :math:`N_u` too. With
+``'zpetc'``, Tomizuka's zero-phase error tracking controller,
+:math:`Q = N_u(z^{-1}) / N_u(1)^2`. Zeros whose series would need more
+than `max_preview` samples (at or near the unit circle) keep only their
+DC gain. d makes F causal, so :math:`G F \approx z^{-d}`: the reference
+is needed d samples ahead.
+
+PID gains
+---------
+:math:`C(z) = k_p + k_i \frac{z}{z-1} + k_d \frac{(1-p)(z-1)}{z-p}`
+(derivative filtered by a pole p). For each (kp, kd, p) on a grid, the
+largest ki that keeps :math:`|1 + C P| \ge` `modulus_margin` at every
+frequency of a log grid reaching below the slowest pole is found in
+closed form (the constraint is quadratic in ki at each frequency), and
+the gains with the largest ki are kept, as in the MIGO designs of Åström
+and Hägglund: the integral gain is what rejects load disturbances. The
+closed loop's poles are then computed; an unstable or margin-violating
+loop is never returned.
+"""
+
+import warnings
+
+import numpy as np
+import control as ct
+
+from .inverse import _fmt_roots
+
+#: a zero this close to the unit circle or outside counts as unstable
+ZERO_RADIUS = 1.0
+#: zeros left of this real part make an inverse ring at the Nyquist
+#: frequency (sampling zeros); they keep only their DC gain
+RINGING = -0.5
+#: truncation of the anticausal series of an unstable zero
+SERIES_TOL = 1e-3
+
+
+def frequency_grid(den, n=1500):
+    """Log frequency grid (rad/sample) from below the slowest pole to pi."""
+    poles = np.roots(den) if den.size > 1 else np.zeros(0)
+    gap = 1.0 - np.abs(poles[np.abs(poles) < 1.0 - 1e-12])
+    low = min(1e-4, 0.1 * gap.min()) if gap.size else 1e-4
+    return np.logspace(np.log10(max(low, 1e-9)), np.log10(np.pi), n)
+
+
+def preview_inverse(num, den, kind='preview', max_preview=20):
+    """Numerator, denominator (descending powers of z) and delay d of the
+    preview inverse of num/den; also the zeros handled approximately."""
+    num = np.trim_zeros(np.asarray(num, float), 'f')
+    zeros = np.roots(num) if num.size > 1 else np.zeros(0)
+    ringing = (np.real(zeros) < RINGING) & (np.abs(zeros) < 1 - 1e-9)
+    unstable = (np.abs(zeros) >= ZERO_RADIUS - 1e-9) | ringing
+    stable_part = num[0] * np.atleast_1d(np.real(np.poly(zeros[~unstable])))
+    q = np.ones(1)
+    dc_only, kept = [], []
+    nu = zeros[unstable]
+    if kind == 'zpetc' and nu.size:
+        poly_u = np.real(np.poly(nu))
+        q = poly_u[::-1] / np.polyval(poly_u, 1.0) ** 2
+    elif nu.size:
+        for zj in nu:
+            count = (int(np.ceil(np.log(SERIES_TOL) / -np.log(abs(zj))))
+                     if abs(zj) > 1 + 1e-6 and np.real(zj) >= RINGING
+                     else max_preview + 1)
+            if count > max_preview:
+                dc_only.append(zj)
+                stable_part = stable_part * (1.0 - zj)
+                continue
+            kept.append(zj)
+            # 1/(z - zj) ~ -sum_i z^i / zj^(i+1), highest power first
+            series = -np.array([zj ** -(i + 1) for i in range(count)])[::-1]
+            q = np.convolve(q, series)
+        if kept:
+            q = q / (np.polyval(np.poly(kept), 1.0) * np.polyval(q, 1.0))
+        q = np.real(q)
+    stable_part = np.real(stable_part)
+    n_num = np.convolve(den, q)
+    delay = n_num.size - stable_part.size
+    n_den = np.concatenate([stable_part, np.zeros(max(delay, 0))])
+    return n_num, n_den, max(delay, 0), dc_only
+
+
+def pid_tf(kp, ki, kd, pole, dt):
+    """C(z) as a transfer function."""
+    num = np.polymul([1.0, -1.0], [1.0, -pole]) * kp
+    num = num + ki * np.polymul([1.0, 0.0], [1.0, -pole])
+    num = num + kd * (1 - pole) * np.polymul([1.0, -1.0], [1.0, -1.0])
+    den = np.polymul([1.0, -1.0], [1.0, -pole])
+    return ct.tf(num, den, dt)
+
+
+def _roots(a, b, level):
+    """Roots r1 <= r2 in ki of |a + ki b|^2 = level^2 (nan where none)."""
+    A = np.abs(b) ** 2
+    B = 2 * np.real(a * np.conj(b))
+    C = np.abs(a) ** 2 - level ** 2
+    disc = B ** 2 - 4 * A * C
+    with np.errstate(invalid='ignore', divide='ignore'):
+        sq = np.where(disc >= 0, np.sqrt(np.maximum(disc, 0)), np.nan)
+        return (-B - sq) / (2 * A), (-B + sq) / (2 * A), C
+
+
+def _ki_max(a, b, mm, high):
+    """Largest ki >= 0 with |1 + L| >= mm at every frequency and |L| <= 1
+    at the frequencies flagged `high` (rows of a = 1 + L(ki=0) are
+    designs, columns frequencies; L = a - 1 + ki b); -1 where none."""
+    r1, r2, c = _roots(a, b, mm)
+    ok0 = np.all(c >= 0, axis=1)
+    bad = np.isfinite(r1) & (r1 > 0)
+    lim = np.where(bad, r1, np.inf).min(axis=1)
+    # crossover below the plant's bandwidth: r1 <= ki <= r2 up there
+    h1, h2, hc = _roots(a[:, high] - 1, b[:, high], 1.0)
+    inside = np.isfinite(h1)
+    lo = np.where(inside, h1, np.inf).max(axis=1, initial=-np.inf)
+    lo = np.where(np.all(inside, axis=1), lo, np.inf)
+    hi = np.where(inside, h2, -np.inf).min(axis=1, initial=np.inf)
+    ki = np.minimum(lim, hi)
+    ok = ok0 & (ki >= np.maximum(lo, 0.0)) & (ki > 0)
+    return np.where(ok, ki, -1.0)
+
+
+def bandwidth(num, den, w):
+    """Frequency (rad/sample) where |P| first falls 3 dB below its low-
+    frequency level (an integrator of P set aside)."""
+    z = np.exp(1j * w)
+    P = np.polyval(num, z) / np.polyval(den, z)
+    poles = np.roots(den) if den.size > 1 else np.zeros(0)
+    if np.any(np.abs(poles - 1) < 1e-6):
+        P = P * (z - 1) / z
+    mag = np.abs(P)
+    below = np.nonzero(mag <= mag[0] / np.sqrt(2))[0]
+    return float(w[below[0]]) if below.size else float(w[-1])
+
+
+#: most the derivative may add to the controller's gain at the Nyquist
+#: frequency, relative to kp (sensor quantisation is amplified by it)
+DERIVATIVE_BOOST = 3.0
+
+
+def design_pid(num, den, dt, modulus_margin):
+    """PID gains (kp, ki, kd, pole) for the plant num/den (descending
+    powers of z, at most one pole at z = 1): the largest ki under the
+    modulus margin, with the crossover below the plant's bandwidth, the
+    derivative's high-frequency boost bounded, and a loop that stays
+    stable when its gain is lowered (no conditional stability, which a
+    saturating drive turns into a limit cycle)."""
+    w = frequency_grid(den)
+    z = np.exp(1j * w)
+    P = np.polyval(num, z) / np.polyval(den, z)
+    wb = bandwidth(num, den, w)
+    high = w > wb
+    # scale of the gains: 1/|P| at the plant's bandwidth and where its
+    # phase first reaches -180 deg, whichever is smaller
+    phase = np.unwrap(np.angle(P))
+    cross = np.nonzero(phase <= phase[0] - np.pi)[0]
+    k0 = min(1.0 / np.abs(P[cross[0] if cross.size else -1]),
+             1.0 / np.abs(P[np.searchsorted(w, wb)]))
+    cands = []
+    for pole in (0.0, 0.5, 0.8):
+        D = (1 - pole) * (z - 1) / (z - pole)
+        I = z / (z - 1)
+        kp = k0 * np.logspace(-4, 1, 60)
+        kd = k0 * np.r_[0.0, np.logspace(-4, 1, 21)]
+        KP, KD = (g.ravel() for g in np.meshgrid(kp, kd))
+        boost = KD * (1 - pole) * 2 / (1 + pole) <= DERIVATIVE_BOOST * KP
+        KP, KD = KP[boost], KD[boost]
+        a = 1 + (KP[:, None] + KD[:, None] * D[None, :]) * P[None, :]
+        b = I[None, :] * P[None, :]
+        ki = _ki_max(a, b, 1.005 * modulus_margin, high)
+        keep = np.isfinite(ki) & (ki > 0)
+        cands += [(k, p_, d, pole) for k, p_, d in
+                  zip(ki[keep], KP[keep], KD[keep])]
+    cands.sort(key=lambda c: -c[0])
+    for ki, kp, kd, pole in cands:
+        C = pid_tf(kp, ki, kd, pole, dt)
+        if loop_radius(num, den, C) < 1 and _unconditional(num, den, C, w):
+            return kp, ki, kd, pole
+    raise ValueError(
+        f"no PID gains meet modulus_margin={modulus_margin} with a "
+        f"stable loop for this plant (poles {_fmt_roots(np.roots(den))},"
+        f" zeros {_fmt_roots(np.roots(num)) if num.size > 1 else 'none'}"
+        f"); lower modulus_margin or check the model")
+
+
+def _unconditional(num, den, C, w):
+    """True if the loop C P never crosses -180 deg with |L| > 1."""
+    z = np.exp(1j * w)
+    L = (np.polyval(num, z) / np.polyval(den, z)
+         * np.polyval(C.num[0][0], z) / np.polyval(C.den[0][0], z))
+    turn = (np.diff(np.sign(L.imag)) != 0) & (L.real[1:] < -1)
+    return not np.any(turn)
+
+
+def loop_radius(num, den, C):
+    """Largest closed-loop pole modulus of C in feedback with num/den."""
+    cn, cd = C.num[0][0], C.den[0][0]
+    char = np.polyadd(np.polymul(den, cd), np.polymul(num, cn))
+    char = np.trim_zeros(char, 'f')
+    return float(np.max(np.abs(np.roots(char)))) if char.size > 1 else 0.0
+
+
+def loop_margins(num, den, C):
+    """(modulus margin, gain margin, phase margin [deg], closed-loop pole
+    radius) of the loop C P, read on the log frequency grid."""
+    w = frequency_grid(den, 6000)
+    z = np.exp(1j * w)
+    L = (np.polyval(num, z) / np.polyval(den, z)
+         * np.polyval(C.num[0][0], z) / np.polyval(C.den[0][0], z))
+    mm = float(np.min(np.abs(1 + L)))
+    mag, ang = np.abs(L), np.angle(L)
+    cross = np.flatnonzero(np.diff(np.sign(mag - 1)) != 0)
+    pm = (float(np.min(180 - np.degrees(np.abs(ang[cross]))))
+          if cross.size else np.inf)
+    turn = np.flatnonzero((np.diff(np.sign(L.imag)) != 0) & (L.real[1:] < 0))
+    gm = float(np.min(1 / mag[turn + 1])) if turn.size else np.inf
+    return mm, gm, pm, loop_radius(num, den, C)

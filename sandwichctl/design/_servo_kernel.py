@@ -1,0 +1,130 @@
+"""The compiled per-sample step of `ServoController`.
+
+All parameters live in one float array `p` and all sizes and offsets in
+one int array `ix`, so that a call from Python unboxes five arguments.
+The layout is written by `pack` and read by `_servo_step`:
+
+``ix``: [preview, lead, n_fb, n_pre, n_post, compensate,
+         off_fb, off_pre, off_post, off_scalar, n_lin, off_lin]
+
+- the feedback block C (e -> u_fb), the linear feedforward (r_ahead ->
+  u_lin), the pre-inverse block (r_ahead -> w, the backlash output
+  wanted) and the post-inverse block (x -> u_post) are state-space
+  blocks, each packed as A (n x n), B (n), C (n), D (1);
+- the scalars are [m1, m2, D1, D2, width, mbar, rate, alpha, u0, y0]:
+  x = alpha w / mbar + the band offset of the inverse.
+
+The state `s` is laid out as [reference delay line (preview), w delay
+line (lead), feedback states, pre states, x_prev, v_prev, offset, post
+states, linear feedforward states].
+"""
+
+import numba
+import numpy as np
+
+from .inverse import _inverse_step
+
+#: index of each scalar in the scalar part of p
+_M1, _M2, _D1, _D2, _WIDTH, _MBAR, _RATE, _ALPHA, _U0, _Y0 = range(10)
+NSCALAR = 10
+
+
+def pack(feedback, pre, post, linear, scalars, preview, lead, compensate):
+    """Lay out the blocks (each an (A, B, C, D) tuple of arrays) and the
+    scalars in (p, ix); return them and the state size."""
+    parts, offsets = [], []
+    pos = 0
+    for A, B, C, D in (feedback, pre, post, linear):
+        offsets.append(pos)
+        n = A.shape[0]
+        block = np.concatenate([np.ravel(A), np.ravel(B), np.ravel(C),
+                                np.ravel(D)[:1]])
+        parts.append(block)
+        pos += n * n + 2 * n + 1
+    parts.append(np.asarray(scalars, dtype=float))
+    p = np.ascontiguousarray(np.concatenate(parts), dtype=float)
+    sizes = [feedback[0].shape[0], pre[0].shape[0], post[0].shape[0]]
+    n_lin = linear[0].shape[0]
+    ix = np.array([preview, lead] + sizes + [int(bool(compensate))]
+                  + offsets[:3] + [pos, n_lin, offsets[3]], dtype=np.int64)
+    nstate = preview + lead + sizes[0] + sizes[1] + 3 + sizes[2] + n_lin
+    return p, ix, nstate
+
+
+@numba.njit(cache=True)
+def _block(p, off, n, s, s0, u):
+    """Output C s + D u of a packed block, then s <- A s + B u in place."""
+    a, b, c = off, off + n * n, off + n * n + n
+    out = p[c + n] * u
+    for i in range(n):
+        out += p[c + i] * s[s0 + i]
+    tmp = np.empty(n)
+    for i in range(n):
+        acc = p[b + i] * u
+        for j in range(n):
+            acc += p[a + i * n + j] * s[s0 + j]
+        tmp[i] = acc
+    for i in range(n):
+        s[s0 + i] = tmp[i]
+    return out
+
+
+@numba.njit(cache=True)
+def _shift(s, s0, n, value):
+    """Push value into the delay line s[s0:s0+n]; return what falls out
+    (the value pushed n samples ago; value itself if n = 0)."""
+    if n == 0:
+        return value
+    out = s[s0 + n - 1]
+    for i in range(n - 1, 0, -1):
+        s[s0 + i] = s[s0 + i - 1]
+    s[s0] = value
+    return out
+
+
+@numba.njit(cache=True)
+def servo_step(p, ix, s, r_ahead, y):
+    """One sample of the servo controller; returns u(k), updates s."""
+    preview, lead = ix[0], ix[1]
+    n_fb, n_pre, n_post, compensate = ix[2], ix[3], ix[4], ix[5]
+    sc = ix[9]
+    ra = r_ahead - p[sc + _Y0]
+    yd = y - p[sc + _Y0]
+    # feedback on the error against the reference of this sample
+    r_now = _shift(s, 0, preview, ra)
+    i_fb = preview + lead
+    u_fb = _block(p, ix[6], n_fb, s, i_fb, r_now - yd)
+    # feedforward: the backlash output wanted, the inverse, L1's inverse
+    i_pre = i_fb + n_fb
+    w_ahead = _block(p, ix[7], n_pre, s, i_pre, ra)
+    w = _shift(s, preview, lead, w_ahead)
+    mbar = p[sc + _MBAR]
+    i_bl = i_pre + n_pre
+    x = p[sc + _ALPHA] * w / mbar
+    if compensate:
+        x_inv, v_hat = _inverse_step(w_ahead, s[i_bl], s[i_bl + 1],
+                                     p[sc + _M1], p[sc + _M2], p[sc + _D1],
+                                     p[sc + _D2], p[sc + _WIDTH])
+        s[i_bl], s[i_bl + 1] = x_inv, v_hat
+        target = x_inv - w_ahead / mbar
+        step = target - s[i_bl + 2]
+        rate = p[sc + _RATE]
+        if rate > 0.0:
+            if step > rate:
+                step = rate
+            elif step < -rate:
+                step = -rate
+        s[i_bl + 2] += step
+        x += s[i_bl + 2]
+    u_ff = _block(p, ix[8], n_post, s, i_bl + 3, x)
+    u_ff += _block(p, ix[11], ix[10], s, i_bl + 3 + n_post, ra)
+    return p[sc + _U0] + u_fb + u_ff
+
+
+@numba.njit(cache=True)
+def servo_run(p, ix, s, r_ahead, y):
+    """`servo_step` over given sequences (open loop: y is given)."""
+    u = np.empty(r_ahead.size)
+    for k in range(r_ahead.size):
+        u[k] = servo_step(p, ix, s, r_ahead[k], y[k])
+    return u

@@ -1,0 +1,199 @@
+"""servo_controller, ServoController, closed loops on any plant, and the
+step-wise servo drive."""
+
+import pickle
+
+import numpy as np
+import control as ct
+import pytest
+
+import sandwichctl as sw
+
+#: the issue's position-axis OE model, on which tracking_controller
+#: returned an unstable loop (pole radius 1.024) without raising
+AXIS = ct.tf([-1.5787062294266296e-05, 3.5644360757045926e-05,
+              -1.834003928566598e-05, 0.0],
+             [1.0, -3.6309821755601424, 5.0142541589696235,
+              -3.122187060316512, 0.7398818715168761], 0.0005)
+
+
+def _integrating(pole=1.0):
+    return ct.tf([0.02, 0.01], np.polymul([1, -pole], [1, -0.6]), 1e-3)
+
+
+class StepPlant:
+    """A plant of our own: a transfer function stepped by hand."""
+
+    def __init__(self, sys):
+        self.ss = ct.ss(sys)
+        self.reset()
+
+    def reset(self):
+        self.x = np.zeros(self.ss.nstates)
+
+    def read(self):
+        return float((self.ss.C @ self.x)[0])
+
+    def step(self, u):
+        self.x = self.ss.A @ self.x + self.ss.B[:, 0] * u
+        return self.read()
+
+
+@pytest.mark.parametrize('mm', [0.5, 0.6, 0.8])
+def test_axis_design_is_stable_and_meets_the_margin(mm):
+    ctrl = sw.servo_controller(AXIS, modulus_margin=mm)
+    assert ctrl.margins['pole_radius'] < 1
+    assert ctrl.margins["modulus"] >= mm * (1 - 1e-3)
+    assert np.all(np.abs(ct.feedback(ctrl.pid * AXIS).poles()) < 1)
+
+
+def test_tracking_controller_raises_instead_of_an_unstable_loop():
+    with pytest.raises(ValueError, match="unstable loop"):
+        sw.tracking_controller(AXIS, modulus_margin=0.8, approximate=True)
+
+
+@pytest.mark.parametrize('pole', [1.0, 0.99999])
+def test_integrating_plants_get_a_type_1_design(pole):
+    P = _integrating(pole)
+    ctrl = sw.servo_controller(P)
+    # the margin holds on a grid reaching below the slowest pole
+    assert ctrl.margins['modulus'] >= 0.6 - 1e-9
+    w = np.logspace(-8, np.log10(np.pi), 20000)
+    z = np.exp(1j * w)
+    C = ctrl.pid
+    L = (np.polyval(C.num[0][0], z) / np.polyval(C.den[0][0], z)
+         * np.polyval(P.num[0][0], z) / np.polyval(P.den[0][0], z))
+    assert np.min(np.abs(1 + L)) >= 0.6 - 1e-3
+    r = np.r_[np.zeros(50), np.ones(3000)]
+    y = sw.closed_loop_response(P, r, ctrl).outputs[0]
+    assert abs(y[-1] - 1) < 1e-6
+
+
+def test_unstable_or_algebraic_models_are_refused():
+    with pytest.raises(ValueError, match="stable or have one integrator"):
+        sw.servo_controller(ct.tf([1], [1, -1.2], 1))
+    with pytest.raises(ValueError, match="delay"):
+        sw.servo_controller(ct.tf([1, 0.5], [1, -0.5], 1))
+    with pytest.raises(TypeError, match="SandwichSystem"):
+        sw.servo_controller("plant")
+    with pytest.raises(ValueError, match="modulus_margin"):
+        sw.servo_controller(AXIS, modulus_margin=1.5)
+    with pytest.raises(ValueError, match="band_fraction"):
+        sw.servo_controller(sw.examples.paper_plant(), band_fraction=2)
+
+
+def test_any_plant_with_a_step_method_gives_the_same_loop():
+    P = ct.tf([0.5, 0.2], [1, -1.1, 0.3], 1)
+    ctrl = sw.servo_controller(P)
+    r = sw.steps_and_sines(600)
+    fast = sw.closed_loop_response(P, r, ctrl)
+    slow = sw.closed_loop_response(StepPlant(P), r, ctrl)
+    np.testing.assert_allclose(slow.outputs, fast.outputs, atol=1e-10)
+    # and by hand
+    ctrl.reset()
+    plant = StepPlant(P)
+    d = ctrl.preview
+    ahead = np.r_[r[d:], np.full(d, r[-1])]
+    y, u = plant.read(), []
+    for k in range(r.size):
+        u.append(ctrl.step(ahead[k], y))
+        y = plant.step(u[-1])
+    np.testing.assert_allclose(u, fast.outputs[1], atol=1e-10)
+
+
+def test_sandwich_design_tracks_the_model_and_crosses_the_play():
+    plant = sw.examples.paper_plant()
+    ctrl = sw.servo_controller(plant, band_fraction=1.0, smoothing=0.0,
+                               jump_samples=1)
+    lin = sw.servo_controller(sw.linearized_plant(plant))
+    r = sw.steps_and_sines(1200)
+    e_sw = r - sw.closed_loop_response(plant, r, ctrl).outputs[0]
+    e_lin = r - sw.closed_loop_response(plant, r, lin).outputs[0]
+    assert ctrl.compensates and not lin.compensates
+    assert np.sqrt(np.mean(e_sw ** 2)) < 0.5 * np.sqrt(np.mean(e_lin ** 2))
+    assert "band" in repr(ctrl)
+
+
+def test_it_is_a_python_control_system():
+    ctrl = sw.servo_controller(sw.SandwichSystem(
+        ct.tf([1.0], [1, -0.5], 1), sw.Backlash(1, 1, 0.1, 0.1),
+        ct.tf([1.0, 0], [1, -0.3], 1)), name='servo')
+    assert ctrl.input_labels == ['r_ahead', 'y']
+    assert ctrl.output_labels == ['u']
+    rng = np.random.default_rng(0)
+    inputs = np.cumsum(rng.standard_normal((2, 40)), axis=1)
+    slow = ct.input_output_response(ctrl, np.arange(40), inputs).outputs
+    ctrl.reset()
+    fast = ctrl.run(inputs[0], inputs[1])
+    np.testing.assert_allclose(np.ravel(slow), fast, atol=1e-12)
+
+
+def test_pickle_keeps_name_design_and_memory():
+    ctrl = sw.servo_controller(sw.examples.paper_plant(), name='axis')
+    for k in range(30):
+        ctrl.step(np.sin(k / 5), 0.1 * k)
+    again = pickle.loads(pickle.dumps(ctrl))
+    assert again.name == 'axis'
+    assert np.array_equal(again.state, ctrl.state)
+    assert again.step(0.3, 0.2) == ctrl.step(0.3, 0.2)
+
+
+def test_operating_point_and_bumpless_reset():
+    P = ct.tf([0.5, 0.2], [1, -1.1, 0.3], 1)
+    ctrl = sw.servo_controller(P, operating_point=(2.0, 10.0))
+    assert ctrl.step(10.0, 10.0) == 2.0
+    ctrl.reset(y=4.2, u=-1.5)
+    assert ctrl.operating_point == (-1.5, 4.2)
+    assert ctrl.step(4.2, 4.2) == -1.5
+
+
+@pytest.mark.parametrize('loop', ['position', 'speed'])
+def test_stepwise_drive_is_bit_for_bit_the_simulation(loop):
+    ref = sw.data.drive_reference(600, loop, rng=3)
+    y = sw.data.servo_drive(ref, loop, 150e-6, seed=7)
+    drive = sw.data.ServoDrive(loop, 150e-6, seed=7, n=ref.size)
+    got = [drive.read()]
+    for u in ref[:-1]:
+        got.append(drive.step(u))
+    assert np.array_equal(got, y)
+    drive.reset()
+    assert drive.read() == 0.0 and drive.k == 0
+
+
+def test_stepwise_drive_refuses_bad_input_and_overrun():
+    drive = sw.data.ServoDrive(n=2, seed=0)
+    with pytest.raises(ValueError, match="finite"):
+        drive.apply(np.nan)
+    drive.apply(0.0)
+    drive.apply(0.0)
+    with pytest.raises(RuntimeError, match="larger n"):
+        drive.apply(0.0)
+
+
+def test_servo_loop_on_the_drive_holds_without_hunting():
+    case = sw.data.drive_case(0, 'position', 200e-6, n=3000)
+    lin = sw.identify_linear(case.u, case.y, nb=2, nf=2, nk=1, dt=case.dt)
+    ctrl = sw.servo_controller(lin)
+    r = sw.servo_reference(case.dt, 1e-3)[:3000]
+    drive = sw.data.ServoDrive('position', 200e-6, seed=1, n=r.size)
+    out = sw.closed_loop_response(drive, r, ctrl)
+    m = sw.servo_metrics(r, *out.outputs, case.dt, deadband=1.5e-6)
+    assert m['rms'] < 1e-4 and m['hunting'] < 3
+    assert drive.saturated == 0
+
+
+def test_servo_metrics_counts_reversals_beyond_the_deadband():
+    r = np.r_[np.zeros(10), np.ones(400)]
+    y = r.copy()
+    y[300::10] += 3e-6
+    assert sw.servo_metrics(r, y, r, 1e-3)['hunting'] > 3
+    assert sw.servo_metrics(r, y, r, 1e-3, deadband=5e-6)['hunting'] == 0
+
+
+def test_random_drives_are_seeded_and_in_range():
+    d = sw.data.random_drive(5)
+    assert d == sw.data.random_drive(5)
+    assert 0 <= d['play'] <= 300e-6 and 0.25e-3 <= d['dt'] <= 2e-3
+    y = sw.data.servo_drive(np.ones(200), d['loop'], d['play'], d['dt'],
+                            seed=0, **d['params'])
+    assert np.all(np.isfinite(y))
