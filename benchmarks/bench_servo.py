@@ -71,13 +71,13 @@ def run(ctrl, r, loop, play, dt, params, seed):
     return m
 
 
-def cases(seeds, randoms, loops):
+def cases(seeds, randoms, loops, seed0=0, random0=0):
     for loop in loops:
-        for seed in range(seeds):
+        for seed in range(seed0, seed0 + seeds):
             for play in (0.0, 12e-6, 200e-6):
                 yield (f"{loop[:3]} s{seed}", loop, play, sw.data.DRIVE_DT,
                        {}, seed)
-    for seed in range(randoms):
+    for seed in range(random0, random0 + randoms):
         d = sw.data.random_drive(seed)
         yield (f"rnd{seed} {d['loop'][:3]}", d['loop'], d['play'], d['dt'],
                d['params'], 100 + seed)
@@ -91,6 +91,10 @@ def scaled(ctrl_lin, factor):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument('--seeds', type=int, default=2)
+    ap.add_argument('--seed0', type=int, default=0,
+                    help='first seed (0-1 and random 0-7 are the tuning '
+                    'drives; take 2 and 8 for held-out ones)')
+    ap.add_argument('--random0', type=int, default=0)
     ap.add_argument('--random', type=int, default=6)
     ap.add_argument('--sweep', action='store_true')
     ap.add_argument('--loops', default='position,speed')
@@ -98,7 +102,8 @@ def main():
     rows, checks = [], []
     start = time.perf_counter()
     for label, loop, play, dt, params, seed in cases(
-            args.seeds, args.random, args.loops.split(',')):
+            args.seeds, args.random, args.loops.split(','), args.seed0,
+            args.random0):
         res, lin = identify(loop, play, dt, params, seed)
         r = sw.servo_reference(dt, 1e-3)
         try:

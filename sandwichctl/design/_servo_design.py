@@ -98,7 +98,11 @@ def preview_inverse(num, den, kind='preview', max_preview=20):
 
 
 def pid_tf(kp, ki, kd, pole, dt):
-    """C(z) as a transfer function."""
+    """C(z) as a transfer function (without the integrator if ki = 0)."""
+    if ki == 0:
+        num = kp * np.array([1.0, -pole]) + kd * (1 - pole) * np.array(
+            [1.0, -1.0])
+        return ct.tf(num, [1.0, -pole], dt)
     num = np.polymul([1.0, -1.0], [1.0, -pole]) * kp
     num = num + ki * np.polymul([1.0, 0.0], [1.0, -pole])
     num = num + kd * (1 - pole) * np.polymul([1.0, -1.0], [1.0, -1.0])
@@ -160,7 +164,9 @@ def design_pid(num, den, dt, modulus_margin):
     modulus margin, with the crossover below the plant's bandwidth, the
     derivative's high-frequency boost bounded, and a loop that stays
     stable when its gain is lowered (no conditional stability, which a
-    saturating drive turns into a limit cycle)."""
+    saturating drive turns into a limit cycle). An integrating plant gets
+    the PD with the largest kp instead: a type-2 loop around play has no
+    rest point and hunts."""
     w = frequency_grid(den)
     z = np.exp(1j * w)
     P = np.polyval(num, z) / np.polyval(den, z)
@@ -172,7 +178,7 @@ def design_pid(num, den, dt, modulus_margin):
     cross = np.nonzero(phase <= phase[0] - np.pi)[0]
     k0 = min(1.0 / np.abs(P[cross[0] if cross.size else -1]),
              1.0 / np.abs(P[np.searchsorted(w, wb)]))
-    cands = []
+    cands, pds = [], []
     for pole in (0.0, 0.5, 0.8):
         D = (1 - pole) * (z - 1) / (z - pole)
         I = z / (z - 1)
@@ -187,11 +193,29 @@ def design_pid(num, den, dt, modulus_margin):
         keep = np.isfinite(ki) & (ki > 0)
         cands += [(k, p_, d, pole) for k, p_, d in
                   zip(ki[keep], KP[keep], KD[keep])]
+        # PD candidates: ki = 0 meets both constraints
+        pd = (np.all(np.abs(a) >= 1.005 * modulus_margin, axis=1)
+              & np.all(np.abs(a[:, high] - 1) <= 1, axis=1))
+        pds += [(p_, d, pole) for p_, d in zip(KP[pd], KD[pd])]
+    integrating = np.any(np.abs(np.roots(den) - 1) < 1e-6)
+    if integrating:
+        # no integral action on an integrating plant: with play, a type-2
+        # loop has no rest point and limit-cycles (the drive's own speed
+        # loop integrates load torques away)
+        cands = []
     cands.sort(key=lambda c: -c[0])
     for ki, kp, kd, pole in cands:
         C = pid_tf(kp, ki, kd, pole, dt)
         if loop_radius(num, den, C) < 1 and _unconditional(num, den, C, w):
             return kp, ki, kd, pole
+    if integrating:
+        # the largest kp of a PD that meets the constraints
+        pds.sort(key=lambda c: -c[0])
+        for kp, kd, pole in pds:
+            C = pid_tf(kp, 0.0, kd, pole, dt)
+            if loop_radius(num, den, C) < 1 and \
+                    _unconditional(num, den, C, w):
+                return kp, 0.0, kd, pole
     raise ValueError(
         f"no PID gains meet modulus_margin={modulus_margin} with a "
         f"stable loop for this plant (poles {_fmt_roots(np.roots(den))},"
