@@ -193,8 +193,21 @@ def load_model(path, return_metadata=False):
         else:
             with open(os.fspath(path), 'rb') as f:
                 text = f.read(_MAX_BYTES + 1)
+    except IsADirectoryError as exc:
+        raise IsADirectoryError(
+            exc.errno, f"path is a directory, not a model file: {where}; "
+            f"pass the path of a .json file written by sw.save_model"
+        ) from None
+    except FileNotFoundError as exc:
+        raise FileNotFoundError(
+            exc.errno, f"path names no file: {where} does not exist; check "
+            f"the name and the working directory ({os.getcwd()})") from None
     except OSError as exc:
-        raise OSError(f"cannot read the model file {where}: {exc}") from exc
+        # the same subclass (PermissionError, ...), so that `except` works
+        message = (f"cannot read the model file {where} (path): "
+                   f"{exc.strerror or exc}")
+        raise (type(exc)(message) if exc.errno is None else
+               type(exc)(exc.errno, message)) from exc
     if len(text) > _MAX_BYTES:
         raise ValueError(f"{where} is larger than {_MAX_BYTES // 2 ** 20} "
                          f"MiB: not a sandwichctl model file")
