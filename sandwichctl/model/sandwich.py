@@ -482,8 +482,9 @@ class SandwichSystem(ct.InterconnectedSystem):
             If True, the outputs are the three signals y, x and v (rows in
             that order); otherwise just y.
         return_states : bool, optional
-            Also store the state trajectory in the result (memory N x
-            nstates).
+            Also store the state trajectory in the result, as
+            ``resp.states`` (memory N x nstates). Without it
+            ``resp.states`` raises AttributeError saying so.
 
         Returns
         -------
