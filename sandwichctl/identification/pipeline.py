@@ -152,8 +152,10 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     Raises
     ------
     ValueError
-        On constant u or y, too few samples for the orders, or orders
-        that cannot be estimated.
+        On constant u or y, too few samples for the orders (fewer than
+        10 p plus the delays, or than p**2, with p = na + nb + nc + nd +
+        4 parameters), data whose peak magnitude is outside 1e-100 ..
+        1e100 (rescale them), or orders that cannot be estimated.
 
     Warns
     -----
