@@ -537,7 +537,8 @@ def identify_linear(u, y=None, nb=None, nf=None, nk=1, dt=True,
     ------
     ValueError, TypeError
         On bad arguments (the message names the argument), a constant u
-        or y, or too few samples (N < 10 (nb + nf) + nk).
+        or y, too few samples (N < 10 (nb + nf) + nk), or data whose peak
+        magnitude is outside 1e-100 .. 1e100 (rescale them).
 
     Examples
     --------
