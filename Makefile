@@ -6,6 +6,11 @@
 #                  (screenshots in docs/_build/screenshots; needs chromium:
 #                  sudo apt-get install -y chromium)
 #   make bench  -- run every benchmark script
+#   make clean-cache -- remove numba's compiled cache: numba re-compiles a
+#                  function when its own file changes, not when a function
+#                  it calls in another file does, so run this after editing
+#                  a compiled function (e.g. backlash_step)
+#   make clean  -- the same, and remove .venv, out/ and the built docs
 # Both create the virtual environment .venv and install sandwichctl into it
 # the first time.
 
@@ -14,7 +19,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test bench docs docs-check clean
+.PHONY: demo test bench docs docs-check clean clean-cache
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -41,5 +46,8 @@ docs-check: $(STAMP)
 bench: $(STAMP)
 	for f in benchmarks/bench_*.py; do $(BIN)/python $$f || exit 1; done
 
-clean:
-	rm -rf $(VENV) out
+clean-cache:
+	find sandwichctl -name '*.nbi' -delete -o -name '*.nbc' -delete
+
+clean: clean-cache
+	rm -rf $(VENV) out docs/_build

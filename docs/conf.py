@@ -108,6 +108,16 @@ nb_execution_mode = 'cache'
 # pages, so the kernels get the notebook's own inline backend. (The plot
 # directive of the .md/.rst pages uses Agg whatever this says.)
 os.environ['MPLBACKEND'] = 'module://matplotlib_inline.backend_inline'
+# The kernels get an IPython profile of their own, in the build directory:
+# it quiets ipykernel's notice that a local kernel talks over TCP without
+# encryption (one per notebook on stderr), and keeps the tutorials
+# independent of the developer's own profile.
+_profile = os.path.join(os.path.dirname(os.path.abspath(__file__)), '_build',
+                        '.ipython', 'profile_default')
+os.makedirs(_profile, exist_ok=True)
+with open(os.path.join(_profile, 'ipython_kernel_config.py'), 'w') as _f:
+    _f.write("c.IPKernelApp.log_level = 'ERROR'\n")
+os.environ['IPYTHONDIR'] = os.path.dirname(_profile)
 nb_execution_cache_path = os.path.join(os.path.dirname(__file__), '_build',
                                        '.jupyter_cache')
 nb_execution_raise_on_error = True
@@ -133,13 +143,20 @@ html_theme_options = {
     'footer_start': ['copyright'],
     'footer_end': ['sphinx-version'],
     'secondary_sidebar_items': ['page-toc'],
-    'header_links_before_dropdown': 6,
+    'header_links_before_dropdown': 5,
 }
 html_show_sourcelink = False
-# The hand-written pages and the tutorials are top-level pages with no
-# sub-pages: no empty "Section Navigation" sidebar on them. (Exact names:
-# Sphinx refuses two wildcard patterns matching one page.) The API pages
-# keep the sidebar that lists the modules.
+# docs/_static/sandwichctl.css: printed output wraps, displayed tables have
+# spacing
+html_static_path = ['_static']
+html_css_files = ['sandwichctl.css']
+# The header shows the four entries of index.md's toctree (getting started,
+# tutorials, user guide, API reference), so each is one click away at any
+# width, with no "More" menu. The hand-written pages and the tutorials get
+# the full width (no "Section Navigation" sidebar; their neighbours are in
+# the header's page and the previous/next links). (Exact names: Sphinx
+# refuses two wildcard patterns matching one page.) The API pages keep the
+# sidebar that lists the modules.
 _here = os.path.dirname(os.path.abspath(__file__))
 html_sidebars = {
     name: [] for name in

@@ -30,6 +30,11 @@ __all__ = ['SandwichWarning', 'IdentificationWarning', 'ExcitationWarning',
 #: would otherwise take minutes and gigabytes before failing.
 MAX_ORDER = 1000
 
+#: Peak magnitudes of data the identifiers accept: their least-squares
+#: costs are sums of squares (and of products of u and y), which overflow
+#: or underflow double precision far outside this range (1e200 does).
+DATA_RANGE = (1e-100, 1e100)
+
 
 # ----------------------------------------------------------------------
 # Warning categories
@@ -317,6 +322,66 @@ def check_vector(name, values, length=None):
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} must be finite; got {arr}")
     return arr.copy()
+
+
+def check_reference(name, values):
+    """A finite, non-zero reference vector to divide by (relative errors)."""
+    arr = check_vector(name, values)
+    if not np.any(arr):
+        raise ValueError(
+            f"{name} is zero, so an error relative to it is undefined; "
+            f"compare with a non-zero reference, or use the absolute error "
+            f"np.linalg.norm(theta_hat - {name})")
+    return arr
+
+
+def check_data_scale(name, parts):
+    """Data (one array or a list of experiments) an identifier can square.
+
+    A signal whose peak magnitude is outside `DATA_RANGE` is refused with
+    the remedy (rescale it); an all-zero signal passes (other checks
+    speak about excitation).
+    """
+    parts = parts if isinstance(parts, (list, tuple)) else [parts]
+    peak = max(float(np.max(np.abs(part))) for part in parts)
+    lo, hi = DATA_RANGE
+    if peak and not lo <= peak <= hi:
+        what = 'overflow' if peak > hi else 'underflow'
+        raise ValueError(
+            f"{name} has peak magnitude {peak:.3g}, outside {lo:g} .. "
+            f"{hi:g}: the least-squares costs (sums of squares) would "
+            f"{what} double precision; rescale {name} (e.g. {name} / "
+            f"{peak:.0e}, other units) and scale the model back")
+
+
+def check_parameter_count(orders, n_samples):
+    """Refuse orders with more parameters than sqrt(N) (`identify`).
+
+    The output-error search's work grows steeply with the number of
+    parameters p = na + nb + nc + nd + 4 (na = nc = 20 on 2,000 samples
+    takes about 15 s, na = nc = 40 over a minute), and p**2 > N leaves
+    each parameter poorly determined anyway.
+    """
+    p = orders['na'] + orders['nb'] + orders['nc'] + orders['nd'] + 4
+    if p * p > n_samples:
+        big = max(('na', 'nb', 'nc', 'nd'), key=orders.get)
+        raise ValueError(
+            f"the orders give p = {p} parameters (na + nb + nc + nd + 4; "
+            f"the largest is {big} = {orders[big]}) but the data have N = "
+            f"{n_samples} samples, which allow at most "
+            f"{int(np.sqrt(n_samples))} (p**2 <= N); lower the orders "
+            f"(sw.select_structure compares candidates) or give at least "
+            f"{p * p} samples")
+
+
+def check_axes(name, ax):
+    """None or a matplotlib Axes (anything with ``plot``) to draw on."""
+    if ax is not None and not callable(getattr(ax, 'plot', None)):
+        raise TypeError(
+            f"{name} must be a matplotlib Axes (e.g. fig, ax = "
+            f"plt.subplots(), then {name}=ax) or None for the current "
+            f"axes; got {type(ax).__name__} {ax!r}")
+    return ax
 
 
 def check_timepts(name, timepts, length, dt):

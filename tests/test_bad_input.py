@@ -36,6 +36,9 @@ NF = sw.backlash_nonlinearity(BL)
 C_PI = ct.tf([0.3, -0.2], [1, -1], 1)
 BIG = 10 ** 6
 ORD = dict(na=2, nb=0, nc=2, nd=1)
+NEG = PLANT.copy_with(d=-PLANT.coefficients['d'])     # negative gain
+U2K = sw.examples.paper_input(2000, seed=0)
+Y2K = PLANT.simulate(U2K).outputs
 
 
 def _nan_at(k, n=N):
@@ -242,6 +245,20 @@ ROWS = [
     ('from_theta-nan',
      lambda t: sw.SandwichSystem.from_theta(PLANT.theta * np.nan, **ORD), VE,
      'theta'),
+    ('from_theta-sign-conflict',
+     lambda t: sw.SandwichSystem.from_theta(NEG.theta, **ORD, sign=1), VE,
+     'sign=1 but theta comes from a system whose gain has sign -1'),
+    ('SandwichSystem.copy_with-unknown', lambda t: PLANT.copy_with(m3=1), TE,
+     'm3'),
+    ('SandwichSystem.copy_with-block-and-coefficients',
+     lambda t: PLANT.copy_with(L1=L1, a=[0.1]), VE,
+     r"blocks \['L1'\] and coefficients \['a'\]"),
+    ('SandwichSystem.copy_with-D1', lambda t: PLANT.copy_with(D1=-1), VE,
+     'D1'),
+    ('SandwichSystem.copy_with-backlash',
+     lambda t: PLANT.copy_with(backlash=L1), TE, 'backlash'),
+    ('simulate-states-not-stored', lambda t: PLANT.simulate(U).states,
+     AttributeError, 'return_states=True.*final_state.*internal=True'),
     ('theta_labels-float', lambda t: sw.theta_labels(2.5, 0, 2, 1), TE,
      'na'),
     ('theta_labels-negative', lambda t: sw.theta_labels(2, -1, 2, 1), VE,
@@ -313,7 +330,16 @@ ROWS = [
     ('save_model-metadata-nan',
      lambda t: sw.save_model(PLANT, t / 'm.json', metadata={'x': np.nan}),
      VE, 'metadata'),
+    ('save_model-directory', lambda t: sw.save_model(PLANT, t),
+     IsADirectoryError, 'path is a directory.*a .json file to write'),
+    ('save_model-missing-folder',
+     lambda t: sw.save_model(PLANT, t / 'no' / 'm.json'), FileNotFoundError,
+     'folder that does not exist.*os.makedirs'),
     ('load_model-path', lambda t: sw.load_model(None), TE, 'path'),
+    ('load_model-missing-file', lambda t: sw.load_model(t / 'nope.json'),
+     FileNotFoundError, 'path names no file.*nope.json'),
+    ('load_model-directory', lambda t: sw.load_model(t), IsADirectoryError,
+     'path is a directory'),
     ('load_model-binary',
      lambda t: sw.load_model(_file(t, 'garbage.json',
                                    bytes(range(256)) * 4)), VE,
@@ -374,6 +400,8 @@ ROWS = [
      'true'),
     ('plot_hysteresis-x', lambda t: sw.plot_hysteresis(BL, x=_nan_at(2)),
      VE, 'x'),
+    ('plot_hysteresis-ax', lambda t: sw.plot_hysteresis(BL, ax='x'), TE,
+     'ax must be a matplotlib Axes'),
     # ------------------------------------------------------------------
     # design: inverses
     ('BacklashInverse-bool', lambda t: sw.BacklashInverse(1, True, 0, 0), TE,
@@ -594,6 +622,13 @@ ROWS = [
      VE,
      'theta0'),
     ('identify-u-None', lambda t: sw.identify(None, Y, **ORD), TE, 'u'),
+    ('identify-orders-against-N',
+     lambda t: sw.identify(U2K, Y2K, na=40, nb=0, nc=40, nd=1), VE,
+     r'p = 85 parameters.*N = 2000 samples.*at most 44'),
+    ('identify-y-overflow', lambda t: sw.identify(UL, YL * 1e200, **ORD), VE,
+     r'y has peak magnitude.*overflow.*rescale y'),
+    ('identify-u-underflow', lambda t: sw.identify(UL * 1e-200, YL, **ORD),
+     VE, r'u has peak magnitude.*underflow.*rescale u'),
     ('identify-response-spacing',
      lambda t: sw.identify(_resp(0.5 * np.arange(400)), **ORD, dt=1), VE,
      'dt'),
@@ -625,8 +660,13 @@ ROWS = [
      'offsets'),
     ('identify_linear-complex',
      lambda t: sw.identify_linear(U * 1j, Y, nb=1, nf=2), TE, 'u'),
+    ('identify_linear-y-overflow',
+     lambda t: sw.identify_linear(UL, YL * 1e200, nb=1, nf=2), VE,
+     r'y has peak magnitude.*overflow'),
     ('compare-model', lambda t: sw.compare('model', U, Y, plot=False), TE,
      'model'),
+    ('compare-ax', lambda t: sw.compare(PLANT, U, Y, ax='x'), TE,
+     "ax must be a matplotlib Axes.*got str 'x'"),
     ('compare-u-nan', lambda t: sw.compare(PLANT, _nan_at(2), Y,
                                            plot=False), VE, 'u'),
     ('compare-length', lambda t: sw.compare(PLANT, U, Y[:-2], plot=False),
@@ -673,6 +713,12 @@ ROWS = [
      lambda t: sw.max_relative_error(Y, Y, scale='bogus'), VE, 'scale'),
     ('parameter_error-length',
      lambda t: sw.parameter_error([1, 2], [1, 2, 3]), VE, 'theta'),
+    ('parameter_error-zero',
+     lambda t: sw.parameter_error([1, 2], [0, 0]), VE,
+     'theta_true is zero.*absolute error'),
+    ('parameter_error-nan',
+     lambda t: sw.parameter_error([1, 2], [np.nan, 1]), VE,
+     'theta_true must be finite'),
     # the paper's examples (maintained elsewhere)
     ('examples.paper_input-n', lambda t: sw.examples.paper_input(100.5), TE,
      'n'),

@@ -88,8 +88,11 @@ def test_multistart_never_worse_than_single_start():
     start = sw.SandwichSystem.from_theta(
         np.array([0.5, -0.2, 0.0, 0.0, 1.0, 1.0, 0.1, 0.1, 0.0]),
         **plant.orders)
-    one = sw.refine(start, u, y)
-    many = sw.refine(start, u, y, n_starts=4, seed=1)
+    # at SNR 10 the data do not pin down d1 (-0.05), and refine says so
+    with pytest.warns(sw.IdentificationWarning, match=r"\['d1'\] are poorly"):
+        one = sw.refine(start, u, y)
+    with pytest.warns(sw.IdentificationWarning, match=r"\['d1'\] are poorly"):
+        many = sw.refine(start, u, y, n_starts=4, seed=1)
     assert many.cost <= one.cost * (1 + 1e-12)      # to rounding
 
 

@@ -122,6 +122,8 @@ def test_compensator_and_inverse():
         assert _names(other) == _names(comp)
         assert (other.smoothing, other.band_fraction) == (0.05, 0.9)
         assert _names(other.model) == _names(plant)
+        assert other.L1_inverse.name == comp.L1_inverse.name == 'L1_inverse'
+        assert other.design_plant.name == comp.design_plant.name
         assert np.array_equal(other.simulate(U, internal=True).outputs,
                               comp.simulate(U, internal=True).outputs)
     for other in _roundtrips(inv):
@@ -241,3 +243,20 @@ def test_copy_with_keeps_names():
                      outputs='b')
     changed = bl.copy_with(D1=0.1)
     assert _names(changed) == _names(bl) and changed.D1 == 0.1
+
+
+def test_sandwich_copy_with_keeps_names():
+    plant = _plant()
+    changed = plant.copy_with(m2=1.5)
+    assert _names(changed) == _names(plant)
+    assert changed.orders == plant.orders and changed.L2 is plant.L2
+
+
+def test_negative_gain_theta_survives_pickling():
+    plant = _plant().copy_with(d=[-1.0, 0.2])
+    theta = pickle.loads(pickle.dumps(plant.theta))
+    assert theta.sign == -1
+    back = sw.SandwichSystem.from_theta(theta, **plant.orders, dt=plant.dt)
+    assert back.gain_sign == -1
+    np.testing.assert_array_equal(back.simulate(U).outputs,
+                                  plant.normalized().simulate(U).outputs)

@@ -105,13 +105,15 @@ class SandwichCompensator(ct.InterconnectedSystem):
         self._model = model
         self._band_fraction = band_fraction
         self._approximate = bool(approximate)
-        self._L1_inverse, reflected = _causal_inverse(model.L1, approximate)
+        # named parts, so that their names survive pickling
+        self._L1_inverse, reflected = _causal_inverse(model.L1, approximate,
+                                                      name='L1_inverse')
         self._exact_L1 = not reflected
         self._delay = co['q1']
         self._design_plant = ct.tf(
             model.L2.num[0][0], np.polymul(model.L2.den[0][0],
                                            np.eye(1, co['q1'] + 1)[0]),
-            model.dt)
+            model.dt, name='design_plant')
         inv = BacklashInverse(co['m1'], co['m2'], band_fraction * co['D1'],
                               band_fraction * co['D2'],
                               smoothing=smoothing, dt=model.dt,

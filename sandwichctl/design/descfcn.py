@@ -385,7 +385,7 @@ def limit_cycles(H, F, A, omega=None, refine=True):
         raise ValueError(f"A must hold amplitudes > 0; got {A.min():g}")
     refine = check_bool('refine', refine)
     if H.isdtime(strict=True):
-        H = unit_circle_frd(H, omega)
+        H = unit_circle_frd(H, omega, name=H.name)
         omega = H.omega
     return ct.describing_function_response(H, F, A, omega=omega,
                                            refine=refine, warn_nyquist=False)
@@ -504,7 +504,7 @@ def sandwich_limit_cycles(model, C, A=None, omega=None, output_mean=0.0,
         half = 0.5 * (v / F.m1 + F.D1 - v / F.m2 + F.D2)
         half = max(half, 1e-6)
         A = np.geomspace(half * 1.001, half * 50, 300)
-    H = model.L1 * C * model.L2
+    H = ct.tf(model.L1 * C * model.L2, name='L1*C*L2')   # names the plot
     return limit_cycles(H, F, A, omega=omega, refine=refine)
 
 

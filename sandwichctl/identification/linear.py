@@ -40,6 +40,7 @@ from scipy.signal import lfilter
 
 from ._data import prepare, scale, scaled
 from .._checks import check_int, check_positive, check_dt, serial_blas
+from .._checks import check_data_scale
 
 __all__ = ['identify_linear', 'LinearIdentificationResult']
 
@@ -536,7 +537,8 @@ def identify_linear(u, y=None, nb=None, nf=None, nk=1, dt=True,
     ------
     ValueError, TypeError
         On bad arguments (the message names the argument), a constant u
-        or y, or too few samples (N < 10 (nb + nf) + nk).
+        or y, too few samples (N < 10 (nb + nf) + nk), or data whose peak
+        magnitude is outside 1e-100 .. 1e100 (rescale them).
 
     Examples
     --------
@@ -553,6 +555,7 @@ def identify_linear(u, y=None, nb=None, nf=None, nk=1, dt=True,
     """
     start = time.perf_counter()
     us, ys, dt, offset_info, estimate = prepare(u, y, dt, offsets)
+    check_data_scale('u', us), check_data_scale('y', ys)
     dt = check_dt('dt', dt)
     n = sum(part.size for part in us)
     nb, nf, nk, integrators = _check_orders(n, nb, nf, nk, integrators)

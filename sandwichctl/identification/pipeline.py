@@ -50,6 +50,7 @@ from .._checks import (check_int, check_order, check_positive, warn,
                        progress_bar, check_option,
                        ExcitationWarning, SimulationWarning,
                        SandwichWarning, IdentificationWarning)
+from .._checks import check_data_scale, check_parameter_count
 
 __all__ = ['identify']
 
@@ -151,8 +152,10 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     Raises
     ------
     ValueError
-        On constant u or y, too few samples for the orders, or orders
-        that cannot be estimated.
+        On constant u or y, too few samples for the orders (fewer than
+        10 p plus the delays, or than p**2, with p = na + nb + nc + nd +
+        4 parameters), data whose peak magnitude is outside 1e-100 ..
+        1e100 (rescale them), or orders that cannot be estimated.
 
     Warns
     -----
@@ -183,6 +186,7 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         raise TypeError(f"identify needs the orders {missing} (e.g. "
                         f"identify(u, y, na=2, nb=0, nc=2, nd=1))")
     us, ys, dt, offset_info, estimate = prepare(u, y, dt, offsets)
+    check_data_scale('u', us), check_data_scale('y', ys)
     methods = ('oe',) + tuple(DEFAULTS)
     if not isinstance(method, str) or method not in methods:
         raise ValueError(f"method must be one of {list(methods)}; got "
@@ -203,6 +207,7 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
             f"with these orders and delays (the largest is {big} = "
             f"{orders[big]}); give at least {needed} samples or lower the "
             f"orders")
+    check_parameter_count(orders, n_samples)
     if method == 'oe':
         if refine not in (None, True):
             raise ValueError(f"refine applies to the recursive methods; "

@@ -10,6 +10,9 @@ import numpy as np
 from scipy import stats
 from scipy.optimize import OptimizeResult
 
+from .._checks import check_reference
+from ..model._coefficients import signed_theta
+
 __all__ = ['IdentificationResult', 'parameter_error']
 
 #: `print(res)` mentions the crossing of the slope lines when the model's
@@ -31,13 +34,19 @@ def parameter_error(theta_hat, theta_true):
     -------
     float or ndarray of shape (N,)
 
+    Raises
+    ------
+    ValueError
+        If `theta_true` is not finite, or is zero (the relative error is
+        then undefined: use ``np.linalg.norm(theta_hat - theta_true)``).
+
     Examples
     --------
     >>> import sandwichctl as sw
     >>> float(sw.parameter_error([1.1, 2.0], [1.0, 2.0]))  # doctest: +ELLIPSIS
     0.0447...
     """
-    theta_true = np.asarray(theta_true, dtype=float)
+    theta_true = check_reference('theta_true', theta_true)
     theta_hat = np.asarray(theta_hat, dtype=float)
     if theta_hat.shape[-1] != theta_true.size:
         raise ValueError(
@@ -120,7 +129,10 @@ class IdentificationResult(OptimizeResult):
         The identified model in the data's units, normalised with b0 = 1
         and d0 = +1 or -1 (the sign of its gain, `SandwichSystem.gain_sign`).
     theta : ndarray
-        Final estimate, order of eq. (2.5); names in `theta_labels`.
+        Final estimate, order of eq. (2.5); names in `theta_labels`. For
+        a model with a negative gain it carries ``sign = -1`` (see
+        `SandwichSystem.theta`), so that ``SandwichSystem.from_theta(
+        res.theta, **orders)`` rebuilds ``res.model``.
     history : ndarray, shape (N, p)
         theta(k) after every sample (empty for batch methods).
     errors : ndarray, shape (N,)
@@ -150,6 +162,12 @@ class IdentificationResult(OptimizeResult):
         slope lines cross with the share of samples its x spends beyond
         (``{'x': ..., 'share': ...}``; printed from 10%).
     """
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        model, theta = self.get('model'), self.get('theta')
+        if model is not None and theta is not None:   # theta carries d0
+            self['theta'] = signed_theta(theta, model.gain_sign)
 
     def __repr__(self):
         lines = [f"IdentificationResult ({self.method}): "

@@ -11,6 +11,7 @@ import math
 
 import numba
 import numpy as np
+import control as ct
 
 from .backlash import backlash_step
 from .._checks import (check_signal, check_vector, check_positive,
@@ -399,3 +400,18 @@ def theta_batch(thetas, orders, sign):
         out += [np.ascontiguousarray(r) for r in
                 _companion_rows(den_tail, num)]
     return (*out, bl)
+
+
+class SimulationResponse(ct.TimeResponseData):
+    """The result of `SandwichSystem.simulate`: a ct.TimeResponseData whose
+    ``states`` says how to get them when they were not stored."""
+
+    @property
+    def states(self):
+        if self.x is None:
+            raise AttributeError(
+                "the states were not stored: call simulate(..., "
+                "return_states=True) to keep them (N x nstates values); "
+                "resp.final_state is the state after the last sample, and "
+                "simulate(..., internal=True) gives x and v as outputs")
+        return ct.TimeResponseData.states.fget(self)

@@ -30,13 +30,21 @@ import control as ct
 
 from .backlash import Backlash
 from ._kernel import (simulate_kernel, companion_kernel, batch_kernel,
-                      companion_form, batch_signals, theta_batch)
+                      companion_form, batch_signals, theta_batch,
+                      SimulationResponse)
+from ._coefficients import (declare_orders, difference_coefficients,
+                           difference_equation, tf_from_coefficients,
+                           signed_theta, SignedTheta)
 from .._checks import (check_discrete_siso_tf, check_order, check_signal,
                        check_vector, common_dt, check_name, check_label,
                        check_bool, check_dt, check_option, check_timepts,
-                       check_finite, warn, SimulationWarning, MAX_ORDER)
+                       check_finite, warn, SimulationWarning)
 
 __all__ = ['SandwichSystem', 'theta_labels', 'step_response']
+
+#: The keys `SandwichSystem.copy_with` accepts besides the blocks.
+_BACKLASH_KEYS = ('m1', 'm2', 'D1', 'D2')
+_COEFFICIENT_KEYS = ('a', 'b', 'c', 'd', 'q1', 'q2') + _BACKLASH_KEYS
 
 
 class SandwichSystem(ct.InterconnectedSystem):
@@ -127,10 +135,10 @@ class SandwichSystem(ct.InterconnectedSystem):
         dt = common_dt('L1', L1.dt, 'L2', L2.dt)
         dt = common_dt('L1/L2', dt, 'backlash', backlash.dt)
         self._L1, self._L2 = L1, L2
-        self._coef1 = _difference_coefficients(num1, den1)
-        self._coef2 = _difference_coefficients(num2, den2)
+        self._coef1 = difference_coefficients(num1, den1)
+        self._coef2 = difference_coefficients(num2, den2)
         if orders is not None:
-            self._coef1, self._coef2 = _declare_orders(
+            self._coef1, self._coef2 = declare_orders(
                 orders, self._coef1, self._coef2)
         bl = Backlash(backlash.m1, backlash.m2, backlash.D1, backlash.D2,
                       dt=dt, name='backlash')
@@ -253,21 +261,85 @@ class SandwichSystem(ct.InterconnectedSystem):
             q1=co['q1'], q2=co['q2'], dt=self.dt, name=self.name,
             inputs=self.input_labels[0], outputs=self.output_labels[0])
 
+    def copy_with(self, **changes):
+        """Return a new SandwichSystem with some parts or coefficients changed.
+
+        For example a perturbed plant for a robustness check:
+        ``plant.copy_with(D1=1.2 * plant.backlash.D1)``.
+
+        Parameters
+        ----------
+        **changes
+            Any of the coefficients of eqs. (2.1)-(2.2), as in
+            `coefficients`: a, b, c, d, q1, q2, m1, m2, D1, D2; or whole
+            blocks: L1, L2 (``ct.TransferFunction``), backlash (a
+            `Backlash`); and name. Blocks and coefficients cannot be
+            changed in one call.
+
+        Returns
+        -------
+        SandwichSystem
+            The sampling time, the signal names, the name (unless given)
+            and the declared orders are kept; a changed coefficient array
+            declares its own order.
+
+        Examples
+        --------
+        >>> import sandwichctl as sw
+        >>> plant = sw.examples.paper_plant()
+        >>> wider = plant.copy_with(D1=0.6, D2=0.7, name='wider')
+        >>> wider.coefficients['D1'], wider.coefficients['D2']
+        (0.6, 0.7)
+        >>> wider.L1 is plant.L1, wider.name
+        (True, 'wider')
+        """
+        blocks = sorted(set(changes) & {'L1', 'L2', 'backlash'})
+        coefs = sorted(set(changes) & set(_COEFFICIENT_KEYS))
+        unknown = sorted(set(changes) - set(blocks) - set(coefs) - {'name'})
+        if unknown:
+            raise TypeError(
+                f"copy_with got unknown key(s) {unknown}; expected some of "
+                f"{', '.join(_COEFFICIENT_KEYS)}, L1, L2, backlash, name")
+        if blocks and coefs:
+            raise ValueError(f"copy_with got blocks {blocks} and coefficients "
+                             f"{coefs}; change one kind or the other")
+        labels = dict(name=changes.pop('name', self.name),
+                      inputs=self.input_labels[0],
+                      outputs=self.output_labels[0])
+        if not set(coefs) <= set(_BACKLASH_KEYS):
+            co = self.coefficients
+            co.update(changes)
+            return type(self).from_coefficients(dt=self.dt, **co, **labels)
+        backlash = (self.backlash.copy_with(**changes) if coefs else
+                    changes.get('backlash', self.backlash))
+        L1, L2 = changes.get('L1', self.L1), changes.get('L2', self.L2)
+        keep = (['na', 'nb'] if L1 is self.L1 else []) + (
+            ['nc', 'nd'] if L2 is self.L2 else [])
+        return type(self)(L1, backlash, L2, **labels,
+                          orders={k: self.orders[k] for k in keep} or None)
+
     @property
     def theta(self):
         """Parameter vector of eq. (2.5) of the normalised system.
 
         Order: c1..c_nc, a1..a_na, m1, m2, D1, D2, b1..b_nb, d1..d_nd.
-        For a positive gain this is the paper's theta (b0 = d0 = 1). For a
-        negative gain (`gain_sign` = -1) it is the same vector of the
-        signed normalisation b0 = 1, d0 = -1, where the d_j are relative
-        to d0; ``from_theta(theta, ..., sign=-1)`` rebuilds the system.
+        For a positive gain this is the paper's theta (b0 = d0 = 1), a
+        plain array. For a negative gain (`gain_sign` = -1) it is the same
+        vector of the signed normalisation b0 = 1, d0 = -1, where the d_j
+        are relative to d0; the vector has no entry for d0, so it is
+        returned as an array that carries ``sign = -1`` (it prints as
+        ``theta([...], sign=-1)``). Either way
+        ``SandwichSystem.from_theta(sys.theta, **sys.orders, dt=sys.dt)``
+        rebuilds ``sys.normalized()``. Copies and arithmetic keep the
+        sign; ``np.asarray(theta)`` and a file do not, so pass
+        ``sign=sys.gain_sign`` to `from_theta` when rebuilding from those.
         """
         sys = self if self.is_normalized else self.normalized()
         co = sys.coefficients
-        return np.concatenate([co['c'], co['a'],
-                               [co['m1'], co['m2'], co['D1'], co['D2']],
-                               co['b'][1:], co['d'][1:] * co['d'][0]])
+        theta = np.concatenate([co['c'], co['a'],
+                                [co['m1'], co['m2'], co['D1'], co['D2']],
+                                co['b'][1:], co['d'][1:] * co['d'][0]])
+        return signed_theta(theta, self.gain_sign)
 
     @property
     def theta_labels(self):
@@ -317,8 +389,8 @@ class SandwichSystem(ct.InterconnectedSystem):
         """
         dt = check_dt('dt', dt)
         backlash = Backlash(m1, m2, D1, D2, dt=dt)
-        L1, a, b = _tf_from_coefficients('a', a, 'b', b, 'q1', q1, dt)
-        L2, c, d = _tf_from_coefficients('c', c, 'd', d, 'q2', q2, dt)
+        L1, a, b = tf_from_coefficients('a', a, 'b', b, 'q1', q1, dt)
+        L2, c, d = tf_from_coefficients('c', c, 'd', d, 'q2', q2, dt)
         orders = {'na': a.size, 'nb': b.size - 1, 'nc': c.size,
                   'nd': d.size - 1}
         return cls(L1, backlash, L2, name=name,
@@ -326,11 +398,13 @@ class SandwichSystem(ct.InterconnectedSystem):
 
     @classmethod
     def from_theta(cls, theta, na, nb, nc, nd, q1=1, q2=1, dt=True,
-                   name=None, sign=1):
+                   name=None, sign=None):
         """Build the normalised sandwich (b0 = 1, d0 = sign) from eq. (2.5).
 
         The inverse of `theta`: ``SandwichSystem.from_theta(sys.theta,
-        **sys.orders, dt=sys.dt)`` is ``sys.normalized()``.
+        **sys.orders, dt=sys.dt)`` is ``sys.normalized()``, for a negative
+        gain too (the `theta` of such a system, or of its identification
+        result, carries ``sign = -1``).
 
         Parameters
         ----------
@@ -345,9 +419,33 @@ class SandwichSystem(ct.InterconnectedSystem):
         name : str, optional
             System name.
         sign : {1, -1}, optional
-            Sign of the overall gain (default 1: the paper's b0 = d0 = 1).
+            Sign of the overall gain, d0. Default: the sign `theta` carries
+            (-1 for the `theta` of a negative-gain system), else 1 (the
+            paper's b0 = d0 = 1). A plain array has no sign: pass
+            ``sign=-1`` to rebuild a negative-gain system from one.
+
+        Examples
+        --------
+        >>> import control as ct, sandwichctl as sw
+        >>> plant = sw.SandwichSystem(ct.tf([0.5, 0], [1, -0.5], 1),
+        ...                           sw.Backlash(1, 1, 0.2, 0.2),
+        ...                           ct.tf([-2], [1, 0.3], 1))
+        >>> plant.theta
+        theta([ 0.3, -0.5,  1. ,  1. ,  0.4,  0.4], sign=-1)
+        >>> same = sw.SandwichSystem.from_theta(plant.theta, **plant.orders)
+        >>> same.gain_sign, same.coefficients['d']
+        (-1, array([-1.]))
         """
+        carried = getattr(theta, 'sign', None) if isinstance(
+            theta, SignedTheta) else None
+        if sign is None:
+            sign = 1 if carried is None else carried
         check_option('sign', sign, (1, -1))
+        if carried is not None and sign != carried:
+            raise ValueError(
+                f"sign={sign} but theta comes from a system whose gain has "
+                f"sign {carried} (theta carries it); leave sign out, or "
+                f"pass np.asarray(theta) to rebuild with another sign")
         na, nb, nc, nd = (check_order(n, v) for n, v in
                           zip(('na', 'nb', 'nc', 'nd'), (na, nb, nc, nd)))
         theta = check_vector('theta', theta, nc + na + 4 + nb + nd)
@@ -384,8 +482,9 @@ class SandwichSystem(ct.InterconnectedSystem):
             If True, the outputs are the three signals y, x and v (rows in
             that order); otherwise just y.
         return_states : bool, optional
-            Also store the state trajectory in the result (memory N x
-            nstates).
+            Also store the state trajectory in the result, as
+            ``resp.states`` (memory N x nstates). Without it
+            ``resp.states`` raises AttributeError saying so.
 
         Returns
         -------
@@ -440,7 +539,7 @@ class SandwichSystem(ct.InterconnectedSystem):
         labels = ['y', 'x', 'v'] if internal else self.output_labels
         # built on the first sample, then given the whole arrays: this
         # saves TimeResponseData's copies of arrays made here
-        resp = ct.TimeResponseData(
+        resp = SimulationResponse(
             timepts[:1], outputs[:, :1],
             states[:1].T if return_states else None, u_copy[:1],
             issiso=not internal, output_labels=labels,
@@ -539,10 +638,10 @@ class SandwichSystem(ct.InterconnectedSystem):
         return (
             f"SandwichSystem {self.name}: {self.input_labels[0]} -> "
             f"{self.output_labels[0]}, dt = {dt}\n"
-            f"  L1: {_difference_equation('x', 'u', co['a'], co['b'], co['q1'])}\n"
+            f"  L1: {difference_equation('x', 'u', co['a'], co['b'], co['q1'])}\n"
             f"  B:  v(k) = backlash(x(k)) with m1 = {co['m1']:.6g}, "
             f"m2 = {co['m2']:.6g}, D1 = {co['D1']:.6g}, D2 = {co['D2']:.6g}\n"
-            f"  L2: {_difference_equation('y', 'v', co['c'], co['d'], co['q2'])}")
+            f"  L2: {difference_equation('y', 'v', co['c'], co['d'], co['q2'])}")
 
     __repr__ = __str__
 
@@ -656,81 +755,6 @@ def step_response(sys, timepts=None, amplitude=1.0, initial_state=None):
     return resp
 
 
-def _declare_orders(orders, coef1, coef2):
-    """Pad the coefficients of eq. (2.1) with zeros up to declared orders."""
-    if not isinstance(orders, dict):
-        raise TypeError(f"orders must be a dict with na, nb, nc, nd; got "
-                        f"{type(orders).__name__}")
-    unknown = set(orders) - {'na', 'nb', 'nc', 'nd', 'q1', 'q2'}
-    if unknown:
-        raise ValueError(f"orders has unknown keys {sorted(unknown)}; "
-                         f"expected na, nb, nc, nd (q1, q2)")
-    out = []
-    for (a, b, q), (na, nb, qn) in ((coef1, ('na', 'nb', 'q1')),
-                                    (coef2, ('nc', 'nd', 'q2'))):
-        n_a = check_order(f"orders[{na!r}]", orders.get(na, a.size))
-        n_b = check_order(f"orders[{nb!r}]", orders.get(nb, b.size - 1))
-        if qn in orders and check_order(f"orders[{qn!r}]",
-                                        orders[qn]) != q:
-            raise ValueError(f"orders[{qn!r}] = {orders[qn]} but the "
-                             f"transfer function has a delay of {q}")
-        if n_a < a.size or n_b < b.size - 1:
-            raise ValueError(
-                f"declared orders {na} = {n_a}, {nb} = {n_b} are smaller "
-                f"than the transfer function's ({a.size}, {b.size - 1})")
-        out.append((np.concatenate([a, np.zeros(n_a - a.size)]),
-                    np.concatenate([b, np.zeros(n_b + 1 - b.size)]), q))
-    return out[0], out[1]
-
-
-def _difference_coefficients(num, den):
-    """(a, b, q) of eq. (2.1) from normalised descending num, den."""
-    q = den.size - num.size
-    b = np.trim_zeros(num, 'b')
-    a = np.trim_zeros(den[1:], 'b')
-    return a, b, q
-
-
-def _tf_from_coefficients(aname, a, bname, b, qname, q, dt):
-    """Transfer function in descending powers of z of eq. (2.1).
-
-    Returns it with the checked coefficient arrays. Trailing zeros of the
-    coefficients are left out of the transfer function (no extra poles at
-    z = 0); the caller keeps them as declared orders.
-    """
-    a = _coefficients(aname, a)
-    b = _coefficients(bname, b)
-    q = check_order(qname, q)
-    for name, arr in ((aname, a), (bname, b)):
-        if arr.size > MAX_ORDER + 1:
-            raise ValueError(f"{name} has {arr.size} coefficients; "
-                             f"sandwichctl accepts orders up to {MAX_ORDER}")
-    if b.size == 0:
-        raise ValueError(f"{bname} must hold at least {bname}0; got an "
-                         f"empty sequence")
-    if b[0] == 0:
-        raise ValueError(
-            f"{bname}[0] is 0, but eq. (2.1) needs the leading coefficient "
-            f"{bname}0 != 0 (it is normalised to 1); express a delay with "
-            f"{qname} instead of leading zeros")
-    a_tf, b_tf = np.trim_zeros(a, 'b'), np.trim_zeros(b, 'b')
-    n = max(a_tf.size, q + b_tf.size - 1)
-    den = np.zeros(n + 1)
-    den[0] = 1.0
-    den[1:a_tf.size + 1] = a_tf
-    num = np.zeros(n + 1)
-    num[q:q + b_tf.size] = b_tf
-    return ct.tf(num, den, dt), a, b
-
-
-def _coefficients(name, values):
-    """A finite 1-D coefficient array (a lone number is one coefficient)."""
-    if isinstance(values, (numbers.Real, np.number)) and not isinstance(
-            values, (bool, np.bool_)):
-        values = [check_finite(f"{name}[0]", values)]
-    return check_vector(name, values)
-
-
 def _rebuild_sandwich(cls, L1, L2, backlash_values, dt, name, inputs,
                       outputs, orders):
     """Unpickle a SandwichSystem (see SandwichSystem.__reduce__)."""
@@ -768,20 +792,3 @@ def _warn_divergence(name, y, state, timepts):
     warn(f"the simulation of {name} diverged: the output is {y[k]} from "
          f"sample {k} (t = {timepts[k]:g}) on; the system is unstable or "
          f"the input too large for it", SimulationWarning)
-
-
-def _difference_equation(out, inp, a, b, q):
-    """Render eq. (2.1) as text, e.g. 'x(k) = - 0.1 x(k-1) + 1.5 u(k-1)'."""
-    terms = [(-ai, f"{out}(k-{i})") for i, ai in enumerate(a, 1)]
-    terms += [(bj, f"{inp}(k{-(q + j):+d})" if q + j else f"{inp}(k)")
-              for j, bj in enumerate(b)]
-    parts = []
-    for coef, sig in terms:
-        if coef == 0:
-            continue
-        if parts:
-            parts.append(f"{'-' if coef < 0 else '+'} {abs(coef):.6g} {sig}")
-        else:
-            parts.append(f"{coef:.6g} {sig}")
-    text = ' '.join(parts)
-    return f"{out}(k) = {text or '0'}"

@@ -140,9 +140,12 @@ def save_model(model, path, metadata=None):
                          f"strings or None") from None
     if hasattr(path, 'write'):
         path.write(text + '\n')
-    else:
+        return
+    try:
         with open(os.fspath(path), 'w', encoding='utf-8') as f:
             f.write(text + '\n')
+    except OSError as exc:
+        raise _file_error(exc, _describe(path), 'write') from None
 
 
 def load_model(path, return_metadata=False):
@@ -194,7 +197,7 @@ def load_model(path, return_metadata=False):
             with open(os.fspath(path), 'rb') as f:
                 text = f.read(_MAX_BYTES + 1)
     except OSError as exc:
-        raise OSError(f"cannot read the model file {where}: {exc}") from exc
+        raise _file_error(exc, where, 'read') from None
     if len(text) > _MAX_BYTES:
         raise ValueError(f"{where} is larger than {_MAX_BYTES // 2 ** 20} "
                          f"MiB: not a sandwichctl model file")
@@ -346,6 +349,26 @@ def _check_path(path, mode):
         raise TypeError(f"path must be a file name (str or os.PathLike) or "
                         f"an open text file; got {type(path).__name__} "
                         f"{_short(path)}")
+
+
+def _file_error(exc, where, action):
+    """`exc` again, of the same OSError subclass (so that ``except
+    FileNotFoundError`` works), with a message that says what to do."""
+    if isinstance(exc, IsADirectoryError):
+        what = 'written by sw.save_model' if action == 'read' else 'to write'
+        message = (f"path is a directory, not a model file: {where}; pass "
+                   f"the name of a .json file {what}")
+    elif isinstance(exc, FileNotFoundError):
+        message = (f"path names no file: {where} does not exist; check the "
+                   f"name and the working directory ({os.getcwd()})"
+                   if action == 'read' else
+                   f"path is in a folder that does not exist: {where}; "
+                   f"create the folder first (os.makedirs)")
+    else:
+        message = (f"cannot {action} the model file {where} (path): "
+                   f"{exc.strerror or exc}")
+    return (type(exc)(message) if exc.errno is None
+            else type(exc)(exc.errno, message))
 
 
 def _dumps(data):

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..model.backlash import Backlash
 from ..model.sandwich import SandwichSystem
-from .._checks import check_signal
+from .._checks import check_signal, check_axes
 
 __all__ = ['plot_hysteresis']
 
@@ -95,7 +95,7 @@ def plot_hysteresis(model_or_backlash, x=None, true=None, ax=None,
     if label is None:
         label = 'model' if reference is None else 'identified'
 
-    if ax is None:
+    if check_axes('ax', ax) is None:
         import matplotlib.pyplot as plt
         ax = plt.gca()
     curves = [(model, label, '-', 'C0')]

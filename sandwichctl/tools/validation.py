@@ -25,14 +25,16 @@ the model runs from the measured past, so its errors cannot accumulate
 over more than k samples (see `compare`).
 """
 
+import contextlib
 import numbers
+import warnings
 
 import numpy as np
 import control as ct
 
 from ..model.sandwich import SandwichSystem
 from .experiments import as_experiments
-from .._checks import check_signal, check_int
+from .._checks import check_signal, check_int, check_axes, SimulationWarning
 
 __all__ = ['fit_percent', 'nrmse', 'max_relative_error', 'compare',
            'CompareResult', 'CompareResultList']
@@ -420,6 +422,7 @@ def compare(model, u, y=None, ax=None, initial_state=None, timepts=None,
     >>> one.horizon
     1
     """
+    ax = check_axes('ax', ax)
     if y is None:
         data = as_experiments(u)
         if len(data) > 1:
@@ -501,7 +504,7 @@ def _simulate(sys, u, initial_state, timepts):
     t = _default_timepts(sys, u.size) if timepts is None else timepts
     x0 = 0.0 if initial_state is None else initial_state
     # An unstable model overflows; that is reported below, not warned.
-    with np.errstate(over='ignore', invalid='ignore'):
+    with _overflow_reported():
         if isinstance(sys, SandwichSystem):
             resp = sys.simulate(u, initial_state=initial_state, timepts=t)
         elif isinstance(sys, ct.NonlinearIOSystem):
@@ -515,6 +518,15 @@ def _simulate(sys, u, initial_state, timepts):
             f"(first bad sample {int(np.flatnonzero(~np.isfinite(yhat))[0])}"
             f"); the model is probably unstable")
     return yhat, t
+
+
+@contextlib.contextmanager
+def _overflow_reported():
+    """No overflow warnings: the caller reports a non-finite result."""
+    with np.errstate(over='ignore', invalid='ignore'), \
+            warnings.catch_warnings():
+        warnings.simplefilter('ignore', SimulationWarning)
+        yield
 
 
 def _check_siso(sys):
@@ -535,7 +547,7 @@ def _recursion(sys, u):
     f computed from u (zero before sample 0).
     """
     if isinstance(sys, SandwichSystem):
-        with np.errstate(over='ignore', invalid='ignore'):
+        with _overflow_reported():        # only v is used; y may diverge
             v = sys.simulate(u, internal=True).outputs[2]
         if not np.all(np.isfinite(v)):
             raise ValueError(
@@ -615,6 +627,7 @@ def _k_step(c, f, y, k):
 def _plot_compare(results, ax):
     import matplotlib.pyplot as plt
 
+    check_axes('ax', ax)
     if ax is None:
         ax = plt.gca()
     first = results[0]
