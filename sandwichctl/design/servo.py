@@ -48,6 +48,12 @@ __all__ = ['ServoController', 'servo_controller']
 #: and checked on held-out ones; larger shares over-compensate there
 BAND_FRACTION = 0.25
 BAND_FRACTION_INTEGRATING = 0.1
+#: the share when the feedforward inverts the sandwich's own linear part
+BAND_FRACTION_MODEL = 0.5
+#: the sandwich's linear part drives the feedforward of a non-integrating
+#: axis when the sandwich fits this many points better than the linear
+#: baseline: the play then distorts the baseline's dynamics
+MODEL_FF_GAP = 2.0
 #: default smoothing width of the inverse, as a share of the band (in v)
 SMOOTHING = 0.02
 
@@ -240,6 +246,33 @@ def _rebuild(design, name, state, operating_point):
     return ctrl
 
 
+def _feedforward_source(choice, result, lin_model, integrating):
+    """Whether the feedforward inverts the sandwich's own mbar L1 L2
+    (else the linear baseline), and a note saying why."""
+    if choice not in ('auto', 'model', 'baseline'):
+        raise ValueError(f"feedforward_from must be 'auto', 'model' or "
+                         f"'baseline'; got {choice!r}")
+    if not isinstance(lin_model, ct.TransferFunction):
+        if choice == 'baseline':
+            raise ValueError("feedforward_from='baseline' needs an "
+                             "identification result with a linear "
+                             "baseline (sw.identify's result)")
+        return True, "linear part designed on the model's mbar L1 L2"
+    gap = result.fit - result.linear['fit']
+    if choice == 'auto':
+        use = not integrating and gap >= MODEL_FF_GAP
+        why = (f"the sandwich fits {gap:.1f} points better than the "
+               f"baseline" + (" (at least " if use else " (less than ")
+               + f"{MODEL_FF_GAP:g}" + (")" if not integrating else
+                                        "), but L1 integrates"))
+    else:
+        use, why = choice == 'model', "as asked"
+    return use, ("feedback designed on the result's linear baseline fit; "
+                 "feedforward inverts the " + ("sandwich's mbar L1 L2"
+                                               if use else "baseline")
+                 + f": {why}")
+
+
 def _static_inverse(num, den):
     """The inverse of a block's DC gain, or of its integrator's gain g
     (u = (z - 1)/(g z) x) when it integrates, after the block's delay:
@@ -291,7 +324,8 @@ def _jump_samples(L1_num, L1_den, band_x, dt, cap=2.0, longest=50):
 def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                      max_preview=20, band_fraction=None, smoothing=None,
                      jump_samples=None, feedback_scale=1.0,
-                     operating_point=(0.0, 0.0), name=None):
+                     feedforward_from='auto', operating_point=(0.0, 0.0),
+                     name=None):
     r"""Design a servo controller from an identified or known model.
 
     The feedback is a PID on the model's linear part (a `SandwichSystem`'s
@@ -331,6 +365,14 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         Samples the band jump is spread over, started half of them early
         (default: the fewest for which :math:`L_1^{-1}` keeps the jump's
         input within twice what holds the far side).
+    feedforward_from : {'auto', 'model', 'baseline'}, optional
+        What the feedforward inverts, for an identification result of a
+        sandwich (whose linear baseline the feedback is always designed
+        on): the sandwich's :math:`\bar m L_1 L_2` ('model'), the
+        baseline, or by default the sandwich's when L1 does not integrate
+        and the sandwich fits at least 2 points better than the baseline
+        (the play then distorts the baseline's dynamics), with half the
+        band compensated.
     feedback_scale : float, optional
         Factor on the designed PID gains (default 1), for detuning or
         sweeps; the scaled loop is checked like the designed one.
@@ -385,14 +427,11 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         lin_model = (result.linear.get('model') if result is not None
                      and isinstance(getattr(result, 'linear', None), dict)
                      else None)
-        if isinstance(lin_model, ct.TransferFunction):
-            P = lin_model
-            linear_note = ("the linear part (feedback and feedforward) is "
-                           "designed on the result's linear baseline fit")
-        else:
-            P = mbar * model.L1 * model.L2
-            linear_note = ("the linear part is designed on the model's "
-                           "mbar L1 L2")
+        integrating = bool(np.any(np.abs(np.roots(L1d) - 1) < 1e-6))
+        ff_model, linear_note = _feedforward_source(
+            feedforward_from, result, lin_model, integrating)
+        P = (lin_model if isinstance(lin_model, ct.TransferFunction)
+             else mbar * model.L1 * model.L2)
     else:
         _check_plant_tf('model', model)
         P, linear_note = model, None
@@ -428,16 +467,33 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         preview, lin_ff = 0, zero
         notes.append("no feedforward: feedback only")
     else:
-        fn, fd, preview, approx = sd.preview_inverse(num, den, feedforward,
-                                                     max_preview)
+        if comp and ff_model:
+            Pm = mbar * model.L1 * model.L2
+            fn, fd, preview, approx = sd.preview_inverse(
+                np.trim_zeros(Pm.num[0][0], 'f'), Pm.den[0][0], feedforward,
+                max_preview)
+        else:
+            fn, fd, preview, approx = sd.preview_inverse(
+                num, den, feedforward, max_preview)
         notes.append(_ff_note(feedforward, preview, approx, linear_note))
     if comp:
-        n2, d2, p2 = _static_inverse(
-            np.trim_zeros(model.L2.num[0][0].astype(float), 'f'),
-            model.L2.den[0][0].astype(float))
-        n1, d1, p1 = _static_inverse(L1n, L1d)
-        integrating = np.any(np.abs(np.roots(L1d) - 1) < 1e-6)
-        default = BAND_FRACTION_INTEGRATING if integrating else BAND_FRACTION
+        # a model without data (known, or built by hand) is inverted
+        # exactly along the reference; an identified one gets the band
+        # offset through the DC gains (see _static_inverse)
+        exact = result is None
+        L2n = np.trim_zeros(model.L2.num[0][0].astype(float), 'f')
+        L2d = model.L2.den[0][0].astype(float)
+        if exact:
+            n2, d2, p2, _ = sd.preview_inverse(L2n, L2d, feedforward,
+                                               max_preview)
+            n1, d1, p1, _ = sd.preview_inverse(L1n, L1d, feedforward,
+                                               max_preview)
+            preview, fn, fd = 0, np.zeros(1), np.ones(1)
+        else:
+            n2, d2, p2 = _static_inverse(L2n, L2d)
+            n1, d1, p1 = _static_inverse(L1n, L1d)
+        default = (BAND_FRACTION_INTEGRATING if integrating else
+                   BAND_FRACTION_MODEL if ff_model else BAND_FRACTION)
         band_fraction_out = (
             default if band_fraction is None else
             check_nonnegative('band_fraction', band_fraction))
@@ -460,7 +516,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         preview = total
         scal = [co['m1'], co['m2'], band_fraction_out * co['D1'],
                 band_fraction_out * co['D2'], smoothing_out, mbar,
-                band_x / jump if jump > 1 else 0.0, 0.0, u0, y0]
+                band_x / jump if jump > 1 else 0.0, float(exact), u0, y0]
         notes.append(
             f"backlash inverse on the reference: {band_fraction_out:.0%} of "
             f"the model's band (D1 + D2 = {co['D1'] + co['D2']:.4g} in x) "
