@@ -158,6 +158,15 @@ def bandwidth(num, den, w):
 DERIVATIVE_BOOST = 3.0
 
 
+def low_frequency_sign(num, den):
+    """Sign of the plant's DC gain (of its integrator's gain if it has a
+    pole at z = 1)."""
+    poles = np.roots(den) if den.size > 1 else np.zeros(0)
+    one = np.abs(poles - 1) < 1e-6
+    rest = np.real(np.poly(poles[~one])) if one.any() else den
+    return 1.0 if np.polyval(num, 1.0) / np.polyval(rest, 1.0) >= 0 else -1.0
+
+
 def design_pid(num, den, dt, modulus_margin):
     """PID gains (kp, ki, kd, pole) for the plant num/den (descending
     powers of z, at most one pole at z = 1): the largest ki under the
@@ -169,6 +178,9 @@ def design_pid(num, den, dt, modulus_margin):
     rest point and hunts."""
     w = frequency_grid(den)
     z = np.exp(1j * w)
+    # a plant with a negative low-frequency gain gets negative gains
+    sign = low_frequency_sign(num, den)
+    num = sign * num
     P = np.polyval(num, z) / np.polyval(den, z)
     wb = bandwidth(num, den, w)
     high = w > wb
@@ -207,7 +219,7 @@ def design_pid(num, den, dt, modulus_margin):
     for ki, kp, kd, pole in cands:
         C = pid_tf(kp, ki, kd, pole, dt)
         if loop_radius(num, den, C) < 1 and _unconditional(num, den, C, w):
-            return kp, ki, kd, pole
+            return sign * kp, sign * ki, sign * kd, pole
     if integrating:
         # the largest kp of a PD that meets the constraints
         pds.sort(key=lambda c: -c[0])
@@ -215,7 +227,7 @@ def design_pid(num, den, dt, modulus_margin):
             C = pid_tf(kp, 0.0, kd, pole, dt)
             if loop_radius(num, den, C) < 1 and \
                     _unconditional(num, den, C, w):
-                return kp, 0.0, kd, pole
+                return sign * kp, 0.0, sign * kd, pole
     raise ValueError(
         f"no PID gains meet modulus_margin={modulus_margin} with a "
         f"stable loop for this plant (poles {_fmt_roots(np.roots(den))},"

@@ -29,12 +29,17 @@ that :math:`L_1^{-1}` (a differentiator when L1 integrates) does not turn
 it into a one-sample spike that saturates the drive.
 """
 
+import pickle
+import warnings
+
 import numpy as np
 import control as ct
 
 from . import _servo_design as sd
 from ._servo_kernel import pack, servo_step, servo_run, NSCALAR
 from .compensator import _tf_text
+from .loop import servo_loop
+from .references import servo_reference
 from ..model.sandwich import SandwichSystem
 from .._checks import (check_bool, check_finite, check_int, check_name,
                        check_nonnegative, check_positive, check_signal)
@@ -246,7 +251,7 @@ def _rebuild(design, name, state, operating_point):
     return ctrl
 
 
-def _feedforward_source(choice, result, lin_model, integrating):
+def _feedforward_source(choice, result, lin_model, integrating, zeros):
     """Whether the feedforward inverts the sandwich's own mbar L1 L2
     (else the linear baseline), and a note saying why."""
     if choice not in ('auto', 'model', 'baseline'):
@@ -260,11 +265,15 @@ def _feedforward_source(choice, result, lin_model, integrating):
         return True, "linear part designed on the model's mbar L1 L2"
     gap = result.fit - result.linear['fit']
     if choice == 'auto':
-        use = not integrating and gap >= MODEL_FF_GAP
+        outside = np.abs(zeros) >= 1
+        use = not integrating and gap >= MODEL_FF_GAP and not outside.any()
         why = (f"the sandwich fits {gap:.1f} points better than the "
-               f"baseline" + (" (at least " if use else " (less than ")
-               + f"{MODEL_FF_GAP:g}" + (")" if not integrating else
-                                        "), but L1 integrates"))
+               f"baseline (" + ("at least " if gap >= MODEL_FF_GAP
+                                else "less than ") + f"{MODEL_FF_GAP:g})"
+               + (", but L1 integrates" if integrating else "")
+               + (f", but L1 L2 has zeros outside the unit circle at "
+                  f"{sd._fmt_roots(zeros[outside])}" if outside.any()
+                  else ""))
     else:
         use, why = choice == 'model', "as asked"
     return use, ("feedback designed on the result's linear baseline fit; "
@@ -369,10 +378,10 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         What the feedforward inverts, for an identification result of a
         sandwich (whose linear baseline the feedback is always designed
         on): the sandwich's :math:`\bar m L_1 L_2` ('model'), the
-        baseline, or by default the sandwich's when L1 does not integrate
-        and the sandwich fits at least 2 points better than the baseline
-        (the play then distorts the baseline's dynamics), with half the
-        band compensated.
+        baseline, or by default the sandwich's when L1 does not integrate,
+        L1 L2 is minimum-phase and the sandwich fits at least 2 points
+        better than the baseline (the play then distorts the baseline's
+        dynamics), with half the band compensated.
     feedback_scale : float, optional
         Factor on the designed PID gains (default 1), for detuning or
         sweeps; the scaled loop is checked like the designed one.
@@ -405,6 +414,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     True
     """
     model, result = _unwrap_model(model)
+    band_by_default = band_fraction is None
     mm = check_finite('modulus_margin', modulus_margin)
     if not 0 < mm < 1:
         raise ValueError(f"modulus_margin must be in (0, 1); got {mm!r}")
@@ -429,7 +439,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                      else None)
         integrating = bool(np.any(np.abs(np.roots(L1d) - 1) < 1e-6))
         ff_model, linear_note = _feedforward_source(
-            feedforward_from, result, lin_model, integrating)
+            feedforward_from, result, lin_model, integrating,
+            np.concatenate([model.L1.zeros(), model.L2.zeros()]))
         P = (lin_model if isinstance(lin_model, ct.TransferFunction)
              else mbar * model.L1 * model.L2)
     else:
@@ -514,7 +525,10 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         post = _ss(n1, np.r_[d1, np.zeros(total - offset_preview)], dt)
         fd = np.r_[fd, np.zeros(total - preview)]
         preview = total
-        scal = [co['m1'], co['m2'], band_fraction_out * co['D1'],
+        # the exact inverse keeps both slopes; the band offset alone (the
+        # linear feedforward carries the mean slope) uses the mean one
+        slopes = (co['m1'], co['m2']) if exact else (mbar, mbar)
+        scal = [*slopes, band_fraction_out * co['D1'],
                 band_fraction_out * co['D2'], smoothing_out, mbar,
                 band_x / jump if jump > 1 else 0.0, float(exact), u0, y0]
         notes.append(
@@ -537,7 +551,46 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     if result is not None and not getattr(result, 'success', True):
         notes.append("designed from an identification result that is not "
                      "a success: check the model first")
-    return ServoController(design, name=name)
+    ctrl = ServoController(design, name=name)
+    if comp and result is not None and band_by_default and \
+            band_fraction > 0 and not _helps_on_model(ctrl, model):
+        # the compensation must at least help on the model it came from
+        ctrl._p[ix_scalar(ctrl) + 2:ix_scalar(ctrl) + 4] = 0.0
+        ctrl.band_fraction = 0.0
+        ctrl._design['band_fraction'] = 0.0
+        ctrl._design['_scalars'][2:4] = 0.0
+        notes.append("compensation turned off: with it, tracking on the "
+                     "identified model itself was worse than without (pass "
+                     "band_fraction to force it)")
+    return ctrl
+
+
+def ix_scalar(ctrl):
+    """Where the scalars start in ctrl._p."""
+    return int(ctrl._ix[9])
+
+
+def _helps_on_model(ctrl, model):
+    """Whether the band offset lowers the RMS error of the loop around the
+    identified model, for a reference that travels 20 bands."""
+    co = model.coefficients
+    num, den = model.L2.num[0][0], model.L2.den[0][0]
+    with np.errstate(divide='ignore', invalid='ignore'):
+        gain = abs(np.polyval(num, 1.0) / np.polyval(den, 1.0))
+    band = 0.5 * (co['m1'] + co['m2']) * (co['D1'] + co['D2']) * gain
+    travel = 20 * band if np.isfinite(band) and band > 0 else 1.0
+    dt = ctrl.dt if ctrl.dt is not True and ctrl.dt <= 0.01 else 0.01
+    r = servo_reference(dt, travel)
+    errors = []
+    for scale in (1.0, 0.0):
+        trial = pickle.loads(pickle.dumps(ctrl))
+        trial._p[ix_scalar(trial) + 2:ix_scalar(trial) + 4] *= scale
+        with np.errstate(all='ignore'), warnings.catch_warnings():
+            warnings.simplefilter('ignore')
+            y = servo_loop(model, r, trial)[0]
+        err = float(np.sqrt(np.mean((r - y) ** 2)))
+        errors.append(err if np.isfinite(err) else np.inf)
+    return errors[0] <= errors[1]
 
 
 def _ff_note(kind, preview, approx, linear_note):
