@@ -295,6 +295,7 @@ def test_a_program_uses_the_header_alone(tmp_path):
     (dict(name='servo-1'), ValueError, 'C identifier'),
     (dict(name='double'), ValueError, 'C keyword'),
     (dict(name=3), TypeError, 'name'),
+    (dict(name='math'), ValueError, 'shadows the standard header'),
     (dict(dtype='float64'), ValueError, "dtype must be 'double' or 'float'"),
     (dict(directory=3.5), TypeError, 'directory'),
 ])
@@ -337,3 +338,16 @@ def test_the_deploy_page_compiles_and_runs(tmp_path, monkeypatch):
                     str(tmp_path / 'main.c'), str(tmp_path / 'axis.c')],
                    check=True)
     assert subprocess.run([str(exe)]).returncode == 0
+
+
+def test_any_model_name_gives_a_valid_comment(tmp_path):
+    """Names end up in the header's comment: no comment end, no trigraph,
+    ASCII only."""
+    model = sw.SandwichSystem(PAPER.L1, PAPER.backlash, PAPER.L2,
+                              name='µ-axis */ ??= ??/')
+    header, source = sw.export_c(sw.sandwich_compensator(model), tmp_path,
+                                 'odd')
+    text = header.read_text(encoding='ascii')
+    assert '*/ ?' not in text and '??' not in text
+    subprocess.run([GCC, *FLAGS, '-o', str(tmp_path / 'odd.so'),
+                    str(source)], check=True)
