@@ -82,6 +82,8 @@ COMPENSATORS = {
     'comp_smooth': lambda: sw.sandwich_compensator(PAPER, smoothing=0.05,
                                                    band_fraction=0.9),
     'comp_nmp': lambda: sw.sandwich_compensator(NMP_L1, approximate=True),
+    'comp_integrating': lambda: sw.sandwich_compensator(INTEGRATING,
+                                                        smoothing=0.01),
 }
 
 
@@ -188,6 +190,24 @@ def test_the_cases_cover_what_the_issue_asks(built):
     for model, block in ((NMP_L1, 'L1'), (NMP_L2, 'L2')):
         assert np.any(np.abs(getattr(model, block).zeros()) > 1)
     assert ctrls['nmp_L2'].preview >= 5
+    # the smoothed branch of the inverse is taken (steps of its input
+    # smaller than the width) and so are the exact one and holds
+    ctrl = ctrls['sandwich']
+    r_ahead = _loop(PAPER, ctrl)[0]
+    off, n = ctrl._ix[7], ctrl._ix[3]                  # the pre block
+    A, B, C, D = np.split(ctrl._p[off:off + n * n + 2 * n + 1],
+                          np.cumsum([n * n, n, n]))
+    s, w_ahead = np.zeros(n), np.empty(r_ahead.size)
+    for k, r in enumerate(r_ahead):
+        w_ahead[k] = D[0] * r + C @ s
+        s = A.reshape(n, n) @ s + B * r
+    m1, m2, D1, D2, width = ctrl._p[ctrl._ix[9]:ctrl._ix[9] + 5]
+    _, v_hat = sw.backlash_inverse_response(w_ahead, m1, m2, D1, D2,
+                                            smoothing=width,
+                                            return_expected=True)
+    dv = np.abs(w_ahead - np.r_[0.0, v_hat[:-1]])
+    assert np.sum((dv > 0) & (dv < width)) > 100
+    assert np.sum(dv >= width) > 100 and np.sum(dv == 0) > 100
 
 
 @pytest.mark.parametrize('case', list(COMPENSATORS))
