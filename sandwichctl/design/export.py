@@ -359,6 +359,11 @@ def _servo_parts(ctrl, w):
 
     consts = ['/* Operating point (u0, y0) given at design. */',
               w.const('u0', sc['u0']), w.const('y0', sc['y0']), '']
+    if not compensate:
+        consts += ['/* A linear design: no backlash inverse. The pre and '
+                   'post blocks and the', '   scalars of the inverse '
+                   'path are zero gains, kept so that the step does what',
+                   '   the compiled Python step does. */', '']
     for b in (fb, pre, post, lin):
         consts += b.constants(w) + ['']
     consts += ['/* Feedforward scalars. */',
