@@ -36,8 +36,6 @@ closed loop's poles are then computed; an unstable or margin-violating
 loop is never returned.
 """
 
-import warnings
-
 import numpy as np
 import control as ct
 

@@ -213,6 +213,24 @@ class SandwichCompensator(ct.InterconnectedSystem):
                          doc="Smoothing width of the backlash inverse.")
     band_fraction = property(lambda self: self._band_fraction,
                              doc="Share of the model's thresholds inverted.")
+    approximate = property(lambda self: self._approximate,
+                           doc="Whether a non-minimum-phase L1 may be "
+                               "inverted approximately.")
+
+    # The protocol through which compiled loops (closed_loop_response,
+    # export_c) run a compensator: a backlash inverse, then a linear
+    # state-space block.
+    @property
+    def inverse_parameters(self):
+        """(m1, m2, D1, D2, smoothing) of the backlash inverse as run."""
+        inv = self._inverse
+        return (inv.m1, inv.m2, inv.D1, inv.D2, inv.smoothing)
+
+    @property
+    def linear_matrices(self):
+        """(A, B, C, D) arrays of the linear block after the inverse
+        (:math:`z^{-q_1} L_1^{-1}`), as the compiled loops run it."""
+        return self._matrices
 
     @property
     def is_exact(self):

@@ -421,7 +421,7 @@ def _servo_parts(ctrl, w):
 
 def _compensator_parts(comp, w):
     inv = comp.backlash_inverse
-    A, B, C, D = comp._matrices
+    A, B, C, D = comp.linear_matrices
     L1 = _Block('l1', "L1's inverse z^-q1 L1^-1, x_d -> u", A.shape[0],
                 A, B, C, D)
     T, n = w.T, w.name
@@ -699,7 +699,7 @@ def export_c(obj, directory, name='servo', dtype='double'):
         values = obj._p
     else:
         inv = obj.backlash_inverse
-        values = np.concatenate([np.ravel(M) for M in obj._matrices]
+        values = np.concatenate([np.ravel(M) for M in obj.linear_matrices]
                                 + [[inv.m1, inv.m2, inv.D1, inv.D2,
                                     inv.smoothing]])
     if not np.all(np.isfinite(values)):

@@ -37,11 +37,10 @@ import control as ct
 
 from . import _servo_design as sd
 from ._servo_kernel import pack, servo_step, servo_run, NSCALAR
-from .compensator import _tf_text
 from .loop import servo_loop
 from .references import servo_reference
 from ..model.sandwich import SandwichSystem
-from .._checks import (check_bool, check_finite, check_int, check_name,
+from .._checks import (check_finite, check_int, check_name,
                        check_nonnegative, check_positive, check_signal)
 
 
