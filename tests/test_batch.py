@@ -2,8 +2,6 @@
 errors, unstable and multi starts, the refine option of `identify`, and
 the checks every batch estimator shares."""
 
-import warnings
-
 import numpy as np
 import pytest
 

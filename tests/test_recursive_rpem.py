@@ -2,8 +2,6 @@
 into the domain, recovery from divergence, series-parallel convergence,
 option checks."""
 
-import warnings
-
 import numpy as np
 import pytest
 

@@ -97,10 +97,9 @@ class OEOptions(_Options):
     screen_samples: int = 2000
 
     method = 'oe'
-    #: The fields that tune the search (``res.options``).
-    SEARCH = ('widths', 'screen_iter', 'keep', 'max_iter', 'tol', 'min_fit',
-              'sp_iter', 'sp_starts', 'n_random', 'seed', 'refits',
-              'max_splits', 'hops', 'relocate', 'smooth', 'screen_samples')
+    #: The fields that are arguments of `identify` itself; the others tune
+    #: the search (``res.options``).
+    ARGUMENTS = ('integrators', 'integrator_block', 'initial_state')
     _MINIMA = dict(screen_iter=1, sp_iter=0, sp_starts=0, n_random=0, seed=0,
                    keep=1, refits=0, max_splits=1, hops=0, relocate=0,
                    screen_samples=100, max_iter=1)
@@ -130,7 +129,9 @@ class OEOptions(_Options):
 
     def search(self):
         """The search's options as a dict (``res.options``)."""
-        return {name: getattr(self, name) for name in self.SEARCH}
+        return {f.name: getattr(self, f.name)
+                for f in dataclasses.fields(self)
+                if f.name not in self.ARGUMENTS}
 
 
 @dataclasses.dataclass(frozen=True)

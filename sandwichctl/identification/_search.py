@@ -16,8 +16,6 @@ one line in the step that uses it; the progress bar counts what the steps
 say they will run (`Search.planned`).
 """
 
-import time
-
 import numpy as np
 
 from ._lm import lm

@@ -49,9 +49,8 @@ __all__ = ['identify']
 
 #: identify's arguments that apply to some methods only, and where they
 #: apply (the options of each method are in `_options`).
-APPLIES = {'theta0': RECURSIVE, 'refine': RECURSIVE,
-           'integrators': ('oe',), 'integrator_block': ('oe',),
-           'initial_state': ('oe',)}
+APPLIES = dict({'theta0': RECURSIVE, 'refine': RECURSIVE},
+               **{name: ('oe',) for name in OEOptions.ARGUMENTS})
 
 
 @serial_blas
@@ -231,7 +230,7 @@ def _method_options(method, options, offsets, arguments):
     if method == 'oe':
         return method_options(method, dict(
             options, **{k: v for k, v in given.items()
-                        if k in OEOptions.__dataclass_fields__}))
+                        if k in OEOptions.ARGUMENTS}))
     return method_options(method, options)
 
 
