@@ -41,7 +41,7 @@ docs: $(STAMP)
 	env -u MPLBACKEND $(BIN)/python -m sphinx -W -n -b html docs docs/_build/html
 
 docs-check: $(STAMP)
-	$(BIN)/python tools/docs_check.py
+	$(BIN)/python docs/_tools/check.py
 
 bench: $(STAMP)
 	for f in benchmarks/bench_*.py; do $(BIN)/python $$f || exit 1; done

@@ -1,6 +1,9 @@
 """The package's architecture (docs/architecture.md) holds: rooms, one-way
 imports with no cycles (imports inside functions included), modules of at
-most 800 lines, and ``__all__`` in every public module."""
+most 800 lines, ``__all__`` in every public module, a page that names
+every module, test files named after modules, and in `identification`
+functions of at most 60 lines of code (compiled kernels aside) and private
+helpers of at most 6 positional parameters."""
 
 import ast
 import importlib
@@ -145,3 +148,86 @@ def test_package_all_is_built_from_the_rooms():
     for name in ('section5_run', 'section6_run', 'study', 'xystudy'):
         assert name not in sw.__all__ and not hasattr(sw, name), name
     assert sw.examples is sw.paper.examples
+
+
+DOCS = PACKAGE.parent / 'docs'
+TESTS = PACKAGE.parent / 'tests'
+#: Test files that check the whole package rather than one module.
+CROSS_CUTTING = {'architecture', 'bad_input', 'docs', 'notebooks', 'pickle',
+                 'readme', 'warnings'}
+#: Test files of the design room, renamed with its rewrite (issue 22,
+#: item 6); nothing else may be listed here.
+DESIGN_PENDING = {'compensate'}
+
+
+def _module_files():
+    """Every module file of the package, relative to it (room __init__
+    files aside: the rooms have their own rows)."""
+    return sorted(str(p.relative_to(PACKAGE)) for p in PACKAGE.rglob('*.py')
+                  if p.name != '__init__.py' or p.parent == PACKAGE)
+
+
+def test_architecture_page_lists_every_module():
+    page = (DOCS / 'architecture.md').read_text(encoding='utf-8')
+    missing = [rel for rel in _module_files() if f"`{rel}`" not in page]
+    assert not missing, (
+        "docs/architecture.md does not name these modules (add a row "
+        "`room/module.py` | what it holds):\n" + '\n'.join(missing))
+    rooms = [room for room in ROOMS if f"**{room}**" not in page]
+    assert not rooms, f"docs/architecture.md has no section for {rooms}"
+
+
+def test_test_files_are_named_after_modules():
+    names = {Path(rel).stem.lstrip('_') for rel in _module_files()}
+    names |= set(ROOMS)
+    stray = []
+    for path in sorted(TESTS.glob('test_*.py')):
+        name = path.stem[len('test_'):]
+        if name in CROSS_CUTTING | DESIGN_PENDING:
+            continue
+        if not any(name == m or name.startswith(m + '_') for m in names):
+            stray.append(path.name)
+    assert not stray, (
+        f"test files not named after a module or room "
+        f"(test_<module>[_<aspect>].py): {stray}")
+
+
+#: Longest function of `identification` in lines of code (no docstring,
+#: comments or blank lines; compiled kernels aside), and most positional
+#: parameters of a private helper (self aside).
+MAX_FUNCTION_LINES = 60
+MAX_POSITIONAL = 6
+
+
+def _code_lines(lines, node):
+    skip = set()
+    body = node.body
+    if ast.get_docstring(node, clean=False) is not None:
+        skip = set(range(body[0].lineno, body[0].end_lineno + 1))
+    return sum(1 for i in range(node.lineno, node.end_lineno + 1)
+               if i not in skip and lines[i - 1].strip()
+               and not lines[i - 1].strip().startswith('#'))
+
+
+def test_identification_functions_are_short():
+    long, wide = [], []
+    for path in sorted((PACKAGE / 'identification').glob('*.py')):
+        text = path.read_text(encoding='utf-8')
+        lines = text.splitlines()
+        for node in ast.walk(ast.parse(text)):
+            if not isinstance(node, ast.FunctionDef) or any(
+                    'numba' in ast.unparse(d) or 'jit' in ast.unparse(d)
+                    for d in node.decorator_list):
+                continue
+            where = f"{path.name}:{node.lineno} {node.name}"
+            if _code_lines(lines, node) > MAX_FUNCTION_LINES:
+                long.append(where)
+            args = node.args.posonlyargs + node.args.args
+            n = len(args) - (bool(args) and args[0].arg in ('self', 'cls'))
+            private = node.name.startswith('_') and not (
+                node.name.startswith('__') and not path.stem.startswith('_'))
+            if (private or path.stem.startswith('_')) and \
+                    n > MAX_POSITIONAL:
+                wide.append(where)
+    assert not long, f"over {MAX_FUNCTION_LINES} lines of code: {long}"
+    assert not wide, f"over {MAX_POSITIONAL} positional parameters: {wide}"

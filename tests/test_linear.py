@@ -8,7 +8,8 @@ import pytest
 from scipy.signal import lfilter
 
 from sandwichctl.identification.linear import (
-    identify_linear, LinearIdentificationResult, _fit_oe, _arx, _max_root)
+    identify_linear, LinearIdentificationResult)
+from sandwichctl.identification._linear import fit_oe, _arx, max_root
 
 
 def _oe_data(rng, B, F, nk, n, noise_ratio=0.0):
@@ -55,7 +56,7 @@ def test_lm_recovers_from_a_perturbed_start(rng):
     B, F = np.array([1.0, -0.5]), np.real(np.poly([0.9, 0.6 + 0.3j,
                                                    0.6 - 0.3j]))
     u, y, _ = _oe_data(rng, B, F, 1, 3000)
-    out = _fit_oe(u, y + 1e-3 * np.sin(np.arange(u.size)), 2, 3, 1, 0)
+    out = fit_oe(u, y + 1e-3 * np.sin(np.arange(u.size)), (2, 3, 1), 0)
     assert out['converged'] and out['nit'] >= 1
     np.testing.assert_allclose(out['F'], F, atol=1e-3)
 
@@ -132,7 +133,7 @@ def test_stable_when_arx_start_is_unstable():
     y = y0 + 2 * np.std(y0) * e / np.std(e)
     for nf in (1, 2):
         _, f_arx = _arx(u / np.std(u), y / np.std(y), 1, nf, 1)
-        assert _max_root(f_arx) > 1          # the start needs reflecting
+        assert max_root(f_arx) > 1          # the start needs reflecting
         res = identify_linear(u, y, 1, nf, 1)
         assert np.all(np.isfinite(res.F))
         assert np.max(np.abs(np.roots(res.F))) < 1 - 1e-7
@@ -208,7 +209,7 @@ def test_fir_and_all_integrators():
 def test_private_fit_oe_on_scaled_arrays(rng):
     B, F = np.array([2.0]), np.array([1, -0.7])
     u, y, _ = _oe_data(rng, B, F, 1, 800, noise_ratio=0.05)
-    out = _fit_oe(u, y, 1, 1, 1, 0)
+    out = fit_oe(u, y, (1, 1, 1), 0)
     assert set(out) >= {'B', 'F', 'cost', 'yhat', 'nit', 'converged'}
     assert out['converged']
     res = identify_linear(u, y, 1, 1, 1)
@@ -233,7 +234,7 @@ def test_output_offsets_with_slow_inputs_and_integrators(integrators):
     us, ys = [p[0] for p in parts], [p[1] for p in parts]
     with warnings.catch_warnings():
         warnings.simplefilter('error')           # no empty-slice means
-        out = _fit_oe(us, ys, 2, 2, 1, integrators, offsets=True)
+        out = fit_oe(us, ys, (2, 2, 1), integrators, offsets=True)
     assert out['cost'] < 1e-18
     np.testing.assert_allclose(out['offsets'], [0.7, -0.3], atol=1e-8)
     np.testing.assert_allclose(out['F'], F, atol=1e-8)

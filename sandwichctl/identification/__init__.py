@@ -8,18 +8,23 @@
   ``oe`` semantics) every sandwich fit is reported against.
 - `batch`: `refine`, the batch output-error refinement of a model on a
   whole record.
-- `pipeline`: `identify`, which chains them.
+- `pipeline`: `identify`, the output-error search (method 'oe') or the
+  recursive methods.
 - `fleet`: `identify_many`, `identify` over many data sets in parallel
   (local processes or a dask cluster).
 - `structure`: `select_structure`, which identifies a small grid of
   orders and delays (and the linear models they nest) and ranks them in
   a `StructureTable`.
 
-The private modules hold the parts: `_predictor` (the model output and
-its sensitivities, the stability predicate), `_recursive` (the compiled
-per-sample steps), `_oe` (the scaled output-error problem and its
-Levenberg-Marquardt solver), `_nested` (sandwich starts nested in a
-linear fit) and `_qp` (the piqp wrapper).
+The private modules hold the parts: `_data` (reading and scaling the
+data), `_options` (each method's options), `_predictor` (the model output
+and its sensitivities, the stability predicate), `_recursive` (the
+compiled per-sample steps), `_problem` (the scaled output-error problem
+and its parametrisation), `_lm` (the Levenberg-Marquardt solver),
+`_linear` (the linear output-error core), `_search` (the output-error
+search, one method per step of the algorithm page), `_starts` (every
+start of the search), `_smooth` (the smoothed-backlash continuation) and
+`_qp` (the piqp wrapper).
 """
 
 from . import result, recursive, linear, batch, pipeline, structure, fleet

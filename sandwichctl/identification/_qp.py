@@ -57,7 +57,8 @@ def _accept(solver, status, accept_max_iter):
     raise QPError(f"piqp returned status {status}")
 
 
-def _solve(P, c, A=None, b=None, x_l=None, x_u=None, accept_max_iter=False):
+def _solve(P, c, *, A=None, b=None, x_l=None, x_u=None,
+           accept_max_iter=False):
     solver = _new_solver()
     solver.setup(P=P, c=c, A=A, b=b, G=None, h_l=None, h_u=None,
                  x_l=x_l, x_u=x_u)

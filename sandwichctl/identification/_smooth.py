@@ -18,13 +18,13 @@ x(k) - x(k-1) to a thousandth, then refines the exact cost from where the
 path ends. The smoothed problems are solved by `scipy.optimize.
 least_squares` (trust-region reflective, bounds m >= 0, D >= 0, forward
 difference Jacobian): they are only a way to a start, the exact
-refinement (`_oe.lm`) decides.
+refinement (`_lm.lm`) decides.
 """
 
 import numpy as np
 from scipy.optimize import least_squares
 
-from ._oe import lm
+from ._lm import lm
 from ._predictor import oe_signals
 
 __all__ = []
@@ -51,7 +51,7 @@ def smooth_refine(st, phi, u, y, max_iter=200, tol=1e-10):
 
     Parameters
     ----------
-    st : Structure
+    st : Parametrisation
     phi : ndarray
         An admissible start (model parameters, then output offsets and
         initial conditions as `st` lays them out; the initial conditions

@@ -46,207 +46,14 @@ import time
 
 import numpy as np
 
-from ._oe import Structure, lm
-from ._predictor import oe_signals
-from .result import IdentificationResult, backlash_significance, whiteness
+from ._data import prepare
+from ._lm import lm
+from ._problem import Problem, unit_poles
+from ._starts import admissible, perturb
 from ..model.sandwich import SandwichSystem
-from ._data import prepare, scale as _scale, scaled
-from .._checks import (check_int, check_positive, warn, progress_bar,
-                       serial_blas,
-                       IdentificationWarning)
+from .._checks import check_int, check_positive, progress_bar, serial_blas
 
 __all__ = ['refine']
-
-#: A fit must be at least this many percent to count as explaining the data.
-MIN_FIT = 5.0
-
-
-def _unit_poles(den, tol=1e-9):
-    """How many roots of the monic denominator 1, a1, ... sit at z = 1."""
-    poly = np.r_[1.0, den]
-    count = 0
-    while poly.size > 1 and abs(np.polyval(poly, 1.0)) <= tol * np.sum(
-            np.abs(poly)):
-        poly = np.polydiv(poly, [1.0, -1.0])[0]
-        count += 1
-    return count
-
-
-class Problem:
-    """A scaled output-error problem: data, structure, sign (private).
-
-    Holds ``u / su`` and ``sign * y / sy`` and maps reduced parameters
-    phi (see `_oe.Structure`) to models and results in the user's units.
-    """
-
-    def __init__(self, u, y, orders, i1=0, i2=0, sign=1, dt=True,
-                 name=None, offsets=False, inits=False):
-        us = list(u) if isinstance(u, list) else [u]
-        ys = list(y) if isinstance(y, list) else [y]
-        self.orders = {k: orders[k] for k in ('na', 'nb', 'nc', 'nd', 'q1',
-                                               'q2')}
-        self.st = Structure(*(self.orders[k] for k in
-                              ('na', 'nb', 'nc', 'nd', 'q1', 'q2')), i1, i2,
-                            n_offsets=len(us) if offsets else 0,
-                            n_inits=len(us) if inits else 0)
-        self.sign = 1 if sign >= 0 else -1
-        self.su = _scale(np.concatenate(us))
-        self.sy = _scale(np.concatenate(ys))
-        self.u_user, self.y_user = us, ys
-        self.u = [scaled(part, self.su) for part in us]
-        self.y = [self.sign * scaled(part, self.sy) for part in ys]
-        self.n_samples = sum(part.size for part in us)
-        self.dt, self.name = dt, name
-        # theta_user = theta_scaled * unit: slopes sy/su, thresholds su
-        im = self.st.im_theta
-        self.unit = np.ones(self.st.p)
-        self.unit[im:im + 2] = self.sy / self.su
-        self.unit[im + 2:im + 4] = self.su
-
-    def phi_of_model(self, model):
-        """Reduced scaled parameters of a model of this structure."""
-        theta = model.normalized().theta / self.unit
-        return self.st.phi(theta)
-
-    def model(self, phi):
-        """The model of phi in the user's units (signed normalisation)."""
-        return SandwichSystem.from_theta(
-            self.st.theta(phi) * self.unit, **self.orders, dt=self.dt,
-            name=self.name, sign=self.sign)
-
-    def result(self, out, method, linear=None, extra=None, min_fit=MIN_FIT):
-        """The `IdentificationResult` of an `_oe.lm` output, with verdict."""
-        phi = out['phi']
-        theta = self.st.theta(phi) * self.unit
-        n, q = self.n_samples, self.st.size
-        # residuals in the user's units, on the data as given (the search
-        # ran on their rounded scaled copy, see `_data.scaled`)
-        y_all = np.concatenate(self.y_user)
-        r = self.sign * self.sy * self.st.residuals(
-            phi, [part / self.su for part in self.u_user],
-            [self.sign * part / self.sy for part in self.y_user])
-        cost = 0.5 * float(r @ r)
-        denom = np.linalg.norm(y_all - y_all.mean())
-        fit = 100 * (1 - np.linalg.norm(r) / denom) if denom > 0 \
-            else -np.inf
-        J = out['J']
-        sigma2 = 2 * out['cost'] / max(n - q, 1)
-        std = np.full(theta.size, np.inf)
-        if np.all(np.isfinite(J)):
-            with np.errstate(all='ignore'):
-                cov_phi = sigma2 * np.linalg.pinv(J.T @ J)
-                T = self.st.T * self.unit[:, None]
-                cov_model = cov_phi[:self.st.q, :self.st.q]
-                std = np.sqrt(np.clip(np.diag(T @ cov_model @ T.T), 0,
-                                      None))
-        stable = self.st.poles_stable(phi)
-        integ = {'L1': self.st.i1, 'L2': self.st.i2}
-        problems = []
-        if not (np.all(np.isfinite(theta)) and np.isfinite(cost)):
-            problems.append("the estimate is not finite")
-        elif not stable:
-            problems.append("the model is unstable (a free pole on or "
-                            "outside the unit circle)")
-        if not out['converged']:
-            problems.append("the optimiser did not converge")
-        bound = self.st.zeros_at_bound(phi) if stable else []
-        if bound:
-            problems.append(
-                f"a zero of {' and '.join(bound)} ended on the search bound "
-                f"|z| = {self.st.zero_radius:.3g}: a degenerate optimum, "
-                f"where a zero far outside trades against a vanishing "
-                f"slope and a growing width; other orders or delays may "
-                f"suit these data")
-        if not fit > min_fit:
-            problems.append(f"the model does not explain the data (fit "
-                            f"{fit:.3g} % <= {min_fit:g} %)")
-        significance = None
-        if linear is not None:
-            if out['cost'] > linear['cost_scaled'] * (1 + 1e-9) + 1e-300:
-                problems.append(f"the fit is worse than the linear "
-                                f"baseline ({fit:.3g} % < "
-                                f"{linear['fit']:.3g} %)")
-            n_lin = linear['n_params']
-            significance = backlash_significance(
-                linear['cost'], cost, n_lin, q, n)
-        success = not problems
-        message = out['message']
-        if problems:
-            message = '; '.join(problems) + f" [{message}]"
-        labels = SandwichSystem.from_theta(
-            theta, **self.orders).theta_labels
-        res = IdentificationResult(
-            model=self.model(phi), theta=theta, history=np.zeros((0,
-                                                                  theta.size)),
-            errors=r, counts={'iterations': out['nit']},
-            success=bool(success), message=message, method=method,
-            options={}, orders=dict(self.orders), theta_labels=labels,
-            nit=out['nit'], std=std, fit=float(fit), cost=cost,
-            integrators=integ, linear=linear, significance=significance,
-            whiteness=whiteness(r), converged=bool(out['converged']),
-            n_experiments=len(self.u))
-        if self.st.n_off:
-            res.offsets = {'method': 'estimate', 'u': [0.0] * len(self.u),
-                           'y': list(self.sign * self.sy * phi[
-                               self.st.q:self.st.q + self.st.n_off])}
-        if self.st.n_inits:
-            res.initial_conditions = [
-                {'x_past': self.su * x, 'v_past': self.sy * v,
-                 'y_past': self.sign * self.sy * yy}
-                for x, v, yy in (self.st.init(phi, e)
-                                 for e in range(self.st.n_inits))]
-        res.crossing = self._crossing(phi, res.model.backlash)
-        if extra:
-            res.update(extra)
-        return res
-
-    def _crossing(self, phi, backlash):
-        """Where the model's slope lines cross (`Backlash.crossing`, in
-        u's units; None if m1 == m2) and the share of the samples its x
-        spends beyond: {'x': ..., 'share': ...}."""
-        cross = backlash.crossing
-        if cross is None:
-            return {'x': None, 'share': 0.0}
-        theta = self.st.theta(phi)
-        with np.errstate(all='ignore'):
-            x = self.su * np.concatenate([
-                oe_signals(theta, self.st.o, uu, self.st.init(phi, e))[1]
-                for e, uu in enumerate(self.u)])
-            beyond = x < cross if backlash.m1 < backlash.m2 else x > cross
-        return {'x': float(cross), 'share': float(np.mean(beyond))}
-
-
-def _perturb(st, phi, rng, spread, m_min):
-    """A random admissible start near phi (multi-start)."""
-    im = st.im
-    for _ in range(100):
-        trial = phi.copy()
-        lin = np.r_[0:im, im + 4:phi.size]
-        trial[lin] += spread * rng.standard_normal(lin.size) * (
-            np.abs(phi[lin]) + 0.1)
-        trial[im:im + 4] *= np.exp(spread * rng.standard_normal(4))
-        trial[im + 2:im + 4] += 1e-3
-        trial = st.clip(trial, m_min)
-        if st.stable(trial):
-            return trial
-    return phi.copy()
-
-
-def _admissible_start(st, phi, m_min):
-    """Move a start into the domain: slopes >= m_min, D >= 0, and unstable
-    free denominators pulled inside the unit circle (roots scaled by 0.9
-    until stable)."""
-    phi = phi.copy()
-    phi[~np.isfinite(phi)] = 0.0
-    phi = st.clip(phi, max(m_min, 1e-3 * max(phi[st.im], phi[st.im + 1],
-                                             1e-300)))
-    for start, n in ((0, st.nc_free), (st.nc_free, st.na_free)):
-        powers = 0.9 ** np.arange(1, n + 1)
-        for _ in range(200):
-            if st.poles_stable(phi):
-                break
-            phi[start:start + n] *= powers
-    return phi
 
 
 @serial_blas
@@ -274,7 +81,8 @@ def refine(model, u, y=None, max_iter=100, tol=1e-10, n_starts=1,
         Number of starts: the model itself plus ``n_starts - 1`` random
         perturbations of it (default 1). The best final cost wins.
     spread : float, optional
-        Relative size of the multi-start perturbations (default 0.3).
+        Relative size of the multi-start perturbations of the model's
+        parameters (at least 0.05 absolute; default 0.3).
     seed : int or numpy.random.Generator, optional
         Seed of the perturbations.
     m_min : float, optional
@@ -315,21 +123,24 @@ def refine(model, u, y=None, max_iter=100, tol=1e-10, n_starts=1,
     m_min = check_positive('m_min', m_min)
     norm = model.normalized()
     co = norm.coefficients
-    prob = Problem(us, ys, norm.orders, _unit_poles(co['a']),
-                   _unit_poles(co['c']), norm.gain_sign, dt=model.dt,
+    prob = Problem(us, ys, norm.orders, i1=unit_poles(co['a']),
+                   i2=unit_poles(co['c']), sign=norm.gain_sign, dt=model.dt,
                    name=model.name, offsets=estimate)
     st = prob.st
     if prob.n_samples <= 2 * st.size:
         raise ValueError(f"the data have {prob.n_samples} samples, too few "
                          f"for {st.size} parameters")
-    phi0 = _admissible_start(st, prob.phi_of_model(norm), m_min)
+    phi0 = admissible(st, prob.phi_of_model(norm), m_min)
     st.widen_zero_radius(phi0)
     rng = np.random.default_rng(seed)
     start = time.perf_counter()
     best = None
     for i in _progress_range(n_starts, progress, 'refine'):
-        phi = phi0 if i == 0 else _perturb(st, phi0, rng, spread, m_min)
-        out = lm(st, phi, prob.u, prob.y, max_iter, tol, m_min)
+        phi = phi0 if i == 0 else perturb(st, phi0, rng, spread, m_min,
+                                          tries=100)
+        if phi is None:
+            phi = phi0.copy()
+        out = lm(st, phi, prob.u, prob.y, max_iter, tol, m_min=m_min)
         if best is None or out['cost'] < best['cost']:
             best = out
     res = prob.result(best, 'refine', extra={
@@ -339,20 +150,7 @@ def refine(model, u, y=None, max_iter=100, tol=1e-10, n_starts=1,
                         spread=spread, m_min=m_min)})
     res.counts['starts'] = n_starts
     res.offsets = dict(offset_info, **(res.get('offsets') or {}))
-    _warn_poorly_determined(res)
     return res
-
-
-def _warn_poorly_determined(res):
-    """Warn (and say in the message) when standard errors exceed 50%."""
-    ill = ~np.isfinite(res.std) | (res.std > 0.5 * np.maximum(
-        np.abs(res.theta), 1e-3))
-    if np.any(ill):
-        names = [n for n, bad in zip(res.theta_labels, ill) if bad]
-        res.message += (f"; parameters poorly determined by these data "
-                        f"(standard error > 50%): {names}")
-        warn(f"{names} are poorly determined by the data (excitation too "
-             f"small or orders too high?)", IdentificationWarning)
 
 
 def _progress_range(n, progress, desc, step=1):

@@ -50,7 +50,6 @@ from concurrent.futures import (BrokenExecutor, ProcessPoolExecutor,
                                 as_completed)
 from contextlib import contextmanager
 
-import numpy as np
 import control as ct
 
 from ..tools.experiments import as_experiments
@@ -264,25 +263,6 @@ def _import_distributed(client):
     return distributed
 
 
-def _is_signal(value):
-    """True for a 1-D array-like of numbers (one signal)."""
-    if isinstance(value, ct.TimeResponseData):
-        return False
-    try:
-        return np.asarray(value, dtype=float).ndim == 1
-    except (TypeError, ValueError):
-        return False
-
-
-def _data_args(item):
-    """The (u, y) arguments of `as_experiments` for one data set."""
-    if isinstance(item, (tuple, list)):
-        if len(item) == 2 and _is_signal(item[0]) and _is_signal(item[1]):
-            return item[0], item[1]               # one (u, y) pair
-        return list(item), None                   # a list of experiments
-    return item, None          # a record (anything else is refused there)
-
-
 def _read_datasets(datasets, dt):
     """[(pairs, dt)] with pairs a list of (u, y) float arrays, per set."""
     if isinstance(datasets, (str, bytes)) or not isinstance(
@@ -299,8 +279,7 @@ def _read_datasets(datasets, dt):
     for i, item in enumerate(datasets):
         where = f"datasets[{i}]"
         try:
-            data = as_experiments(*_data_args(item),
-                                  dt=None if dt is True else dt)
+            data = as_experiments(item, dt=None if dt is True else dt)
         except (TypeError, ValueError) as exc:
             raise type(exc)(f"{where}: {exc}") from None
         jobs.append(([(u, y) for u, y in data], data.dt))
@@ -371,8 +350,8 @@ def _run_processes(jobs, orders, options, progress, processes):
             pool = _POOL.acquire(processes)
             broken = False
             try:
-                broken = _run_on(pool, jobs, todo, orders, options, outcomes,
-                                 bar)
+                broken = _run_on(pool, jobs, todo, outcomes, bar,
+                                 orders=orders, options=options)
             finally:
                 _POOL.release(pool, discard=broken)
             todo = [i for i in todo
@@ -382,7 +361,7 @@ def _run_processes(jobs, orders, options, progress, processes):
     return outcomes
 
 
-def _run_on(pool, jobs, todo, orders, options, outcomes, bar):
+def _run_on(pool, jobs, todo, outcomes, bar, *, orders, options):
     """Run the jobs `todo` on `pool` into `outcomes`; True if it broke."""
     futures = {}
     try:

@@ -25,7 +25,7 @@ The interpretations of the places where the paper is loose are listed in
 ``docs/algorithm.md``; each is an option named after the paper's symbol.
 """
 
-
+import dataclasses
 
 import numpy as np
 
@@ -34,10 +34,10 @@ from ._recursive import (bundle_run, gradient_run,
                          rpem_run, LONG, SHORT, NULL, STOP, SKIP,
                          SUBGRADIENT, RPEM_OK, RPEM_LIMITED, RPEM_REJECTED,
                          RPEM_RESET)
+from ._options import OPTIONS, RECURSIVE, method_options
 from .result import IdentificationResult
 from ..model.sandwich import SandwichSystem, theta_labels
 from .._checks import (warn, IdentificationWarning, check_order,
-                       check_int, check_positive, check_nonnegative,
                        check_signal, check_vector, check_finite)
 
 __all__ = ['RecursiveIdentifier']
@@ -53,112 +53,21 @@ _KINDS_OF = {'bundle': ('long', 'short', 'null', 'stop'),
              'gradient/subgradient': ('long', 'subgradient'),
              'rpem': ('ok', 'limited', 'rejected', 'reset')}
 
-#: Default options of each recursive method (paper symbols where defined).
-DEFAULTS = {
-    'bundle': dict(eta0=0.015, k1=6, delta=1e-4, q=0.1, q_star=0.5,
-                   gamma=0.5, eta_max=None, rho=0.5, n_ls=10,
-                   step_bound=False, full_step_test=False,
-                   predictor='series-parallel', m_min=1e-6,
-                   divergence_limit=1e6),
-    'gradient': dict(mu=0.009, nonsmooth='skip', skip_nonsmooth=None,
-                     predictor='series-parallel', m_min=1e-6,
-                     divergence_limit=1e6),
-    'rpem': dict(lam0=0.99, lam_start=0.95, P0=10.0, p_max=1e6,
-                 max_step=0.5, warmup=0, m_min=1e-6, err_limit=1e6,
-                 divergence_limit=1e6),
-}
+#: Default options of each recursive method (paper symbols where defined;
+#: `_options` checks and documents them).
+DEFAULTS = {method: {f.name: f.default for f in
+                     dataclasses.fields(OPTIONS[method])}
+            for method in RECURSIVE}
 
 _CHUNK = 4096
 
 
 def _check_options(method, options):
-    if method not in DEFAULTS:
+    """The checked options of a recursive method, as a dict."""
+    if method not in RECURSIVE:
         raise ValueError(f"method must be one of {sorted(DEFAULTS)}; got "
                          f"{method!r}")
-    unknown = set(options) - set(DEFAULTS[method])
-    if unknown:
-        raise TypeError(
-            f"unknown option(s) {sorted(unknown)} for method={method!r}; "
-            f"valid options are {sorted(DEFAULTS[method])}")
-    opt = dict(DEFAULTS[method], **options)
-    if method == 'rpem':
-        for name in ('lam0', 'lam_start'):
-            val = check_finite(name, opt[name])
-            if not 0 < val <= 1:
-                raise ValueError(f"{name} must be in (0, 1]; got {val}")
-            opt[name] = val
-        for name in ('P0', 'p_max', 'max_step', 'm_min', 'err_limit',
-                     'divergence_limit'):
-            opt[name] = check_positive(name, opt[name])
-        opt['warmup'] = check_int('warmup', opt['warmup'])
-        return opt
-    if opt['predictor'] not in ('series-parallel', 'parallel'):
-        raise ValueError(f"predictor must be 'series-parallel' or "
-                         f"'parallel'; got {opt['predictor']!r}")
-    opt['m_min'] = check_positive('m_min', opt['m_min'])
-    opt['divergence_limit'] = check_positive('divergence_limit',
-                                             opt['divergence_limit'])
-    if method == 'gradient':
-        opt['mu'] = check_positive('mu', opt['mu'])
-        reading = _nonsmooth_reading(options)
-        opt['nonsmooth'] = reading
-        opt['skip_nonsmooth'] = reading == 'skip'
-        return opt
-    opt['k1'] = check_int('k1', opt['k1'], minimum=1)
-    eta0 = check_positive('eta0', opt['eta0'])
-    if eta0 > 1:
-        raise ValueError(f"eta0 must be in (0, 1] (eq. (3.7)); got {eta0}")
-    opt['eta0'] = eta0
-    opt['delta'] = check_positive('delta', opt['delta'])
-    q = check_finite('q', opt['q'])
-    if not 0 < q < 0.5:
-        raise ValueError(f"q must be in (0, 0.5) (eq. (3.7)); got {q}")
-    q_star = check_finite('q_star', opt['q_star'])
-    if not q < q_star < 1:
-        raise ValueError(
-            f"q_star must be in (q, 1) = ({q}, 1) (eq. (3.7)); got {q_star}")
-    opt['q'], opt['q_star'] = q, q_star
-    opt['gamma'] = check_nonnegative('gamma', opt['gamma'])
-    eta_max = eta0 if opt['eta_max'] is None else check_positive(
-        'eta_max', opt['eta_max'])
-    if not eta0 <= eta_max <= 1:
-        raise ValueError(f"eta_max must be in [eta0, 1] = [{eta0}, 1]; got "
-                         f"{eta_max}")
-    opt['eta_max'] = eta_max
-    rho = check_finite('rho', opt['rho'])
-    if not 0 < rho < 1:
-        raise ValueError(f"rho must be in (0, 1); got {rho}")
-    opt['rho'] = rho
-    opt['n_ls'] = check_int('n_ls', opt['n_ls'], minimum=0)
-    opt['step_bound'] = bool(opt['step_bound'])
-    opt['full_step_test'] = bool(opt['full_step_test'])
-    return opt
-
-
-#: Readings of "the nonsmooth points are omitted" (Section 5) for the
-#: gradient baseline, see `RecursiveIdentifier`.
-NONSMOOTH_READINGS = ('skip', 'subgradient')
-
-
-def _nonsmooth_reading(options):
-    """The gradient method's reading from `nonsmooth` / `skip_nonsmooth`.
-
-    ``skip_nonsmooth`` (True/False) is the older spelling of ``nonsmooth``
-    ('skip'/'subgradient'); both may be given only if they agree.
-    """
-    reading = options.get('nonsmooth', 'skip')
-    if reading not in NONSMOOTH_READINGS:
-        raise ValueError(f"nonsmooth must be one of {NONSMOOTH_READINGS}; "
-                         f"got {reading!r}")
-    old = options.get('skip_nonsmooth')
-    if old is None:
-        return reading
-    implied = 'skip' if bool(old) else 'subgradient'
-    if 'nonsmooth' in options and reading != implied:
-        raise ValueError(
-            f"skip_nonsmooth={old} means nonsmooth={implied!r}, but "
-            f"nonsmooth={reading!r} was given; pass only nonsmooth")
-    return implied
+    return method_options(method, options).as_dict()
 
 
 class RecursiveIdentifier:

@@ -3,14 +3,19 @@
 `IdentificationResult` is a `scipy.optimize.OptimizeResult` with the
 identified `SandwichSystem` in ``model``. The recursive estimators
 (`RecursiveIdentifier`), the batch refinement (`refine`) and the
-`identify` pipeline all return it, so they import it from here.
+`identify` pipeline all return it, so they import it from here, and they
+all judge it here: `verdict` lists the checks a model fails and `judge`
+writes them into ``success``, ``message`` and warnings.
 """
+
+from typing import NamedTuple
 
 import numpy as np
 from scipy import stats
 from scipy.optimize import OptimizeResult
 
-from .._checks import check_reference
+from .._checks import (check_reference, warn, ExcitationWarning,
+                       IdentificationWarning)
 from ..model._coefficients import signed_theta
 
 __all__ = ['IdentificationResult', 'parameter_error']
@@ -18,6 +23,120 @@ __all__ = ['IdentificationResult', 'parameter_error']
 #: `print(res)` mentions the crossing of the slope lines when the model's
 #: x spends at least this share of the samples beyond it.
 CROSSING_NOTE = 0.1
+#: A fit must be at least this many percent to count as explaining the data.
+MIN_FIT = 5.0
+#: A parameter is poorly determined when its standard error exceeds this
+#: share of its size (at least 1e-3).
+POORLY_DETERMINED = 0.5
+#: The data excite the backlash when the model's backlash is outside its
+#: memory zone in at least this share of the samples.
+MIN_EXCITATION = 0.01
+
+
+class Failure(NamedTuple):
+    """A failed check of `verdict`: its name, the sentence that says so,
+    and whether it fails the identification (else it only warns)."""
+    check: str
+    text: str
+    fatal: bool
+
+
+def verdict(*, finite=None, stable=None, estimate=None, converged=None,
+            zeros_at_bound=(), zero_radius=None, fit=None, min_fit=MIN_FIT,
+            linear=None, cost_scaled=None, std=None, theta=None, labels=(),
+            excitation=None):
+    """The checks an identified model fails, in the order they are told.
+
+    Every argument is one fact about the model; a fact left at None is
+    not checked. An empty list is a success.
+
+    Parameters
+    ----------
+    finite, stable : bool
+        Batch methods: the estimate and its cost are finite; the free
+        poles are strictly stable (checked only when finite).
+    estimate : bool
+        Recursive methods: the estimate is finite and stable.
+    converged : bool
+        The optimiser converged.
+    zeros_at_bound : sequence of str, zero_radius : float
+        Blocks with a zero on the search bound |z| = zero_radius.
+    fit, min_fit : float
+        The fit (percent) must exceed min_fit.
+    linear : dict, cost_scaled : float
+        The linear baseline (``fit``, ``cost_scaled``); the model's cost on
+        the same scaled data must not exceed its cost.
+    std, theta, labels
+        Standard errors: above `POORLY_DETERMINED` of |theta| a parameter
+        is poorly determined (not fatal).
+    excitation : float
+        Share of the samples the backlash is outside its memory zone:
+        below `MIN_EXCITATION` the data hardly excite it (not fatal).
+
+    Returns
+    -------
+    list of Failure
+    """
+    failed = []
+
+    def fail(check, text, fatal=True):
+        failed.append(Failure(check, text, fatal))
+
+    if finite is False:
+        fail('finite', "the estimate is not finite")
+    elif stable is False:
+        fail('stable', "the model is unstable (a free pole on or outside "
+                       "the unit circle)")
+    if estimate is False:
+        fail('estimate', "the estimate is unstable or not finite (a pole "
+                         "of L1 or L2 on or outside the unit circle)")
+    if converged is False:
+        fail('converged', "the optimiser did not converge")
+    if zeros_at_bound:
+        fail('zeros', f"a zero of {' and '.join(zeros_at_bound)} ended on "
+                      f"the search bound |z| = {zero_radius:.3g}: a "
+                      f"degenerate optimum, where a zero far outside trades "
+                      f"against a vanishing slope and a growing width; "
+                      f"other orders or delays may suit these data")
+    if fit is not None and not fit > min_fit:
+        fail('fit', f"the model does not explain the data (fit {fit:.3g} % "
+                    f"<= {min_fit:g} %)")
+    if linear is not None and \
+            cost_scaled > linear['cost_scaled'] * (1 + 1e-9) + 1e-300:
+        fail('linear', f"the fit is worse than the linear baseline "
+                       f"({fit:.3g} % < {linear['fit']:.3g} %)")
+    if std is not None:
+        ill = ~np.isfinite(std) | (std > POORLY_DETERMINED * np.maximum(
+            np.abs(theta), 1e-3))
+        if np.any(ill):
+            fail('std', [n for n, bad in zip(labels, ill) if bad], False)
+    if excitation is not None and excitation < MIN_EXCITATION:
+        fail('excitation', excitation, False)
+    return failed
+
+
+def judge(res, failed):
+    """Write the `verdict` `failed` into `res`: a fatal failure sets
+    ``success`` to False and is told in front of ``message``; a poorly
+    determined parameter is told after it and warns, as does too little
+    excitation."""
+    fatal = [f.text for f in failed if f.fatal]
+    if fatal:
+        res.success = False
+        res.message = '; '.join(fatal) + f" [{res.message}]"
+    for f in failed:
+        if f.check == 'std':
+            res.message += (f"; parameters poorly determined by these data "
+                            f"(standard error > 50%): {f.text}")
+            warn(f"{f.text} are poorly determined by the data (excitation "
+                 f"too small or orders too high?)", IdentificationWarning)
+        elif f.check == 'excitation':
+            warn(f"the backlash of the identified model is outside its "
+                 f"memory zone in only {f.text:.1%} of the samples: the "
+                 f"data hardly excite it, so m1, m2, D1, D2 are unreliable "
+                 f"(is the input amplitude smaller than the dead band?)",
+                 ExcitationWarning)
+    return res
 
 
 def parameter_error(theta_hat, theta_true):

@@ -34,8 +34,8 @@ import numpy as np
 
 from .linear import identify_linear
 from .pipeline import identify
-from ..tools.experiments import _check_dt
-from ..tools.residuals import _read, _simulate
+from ..tools.experiments import _check_dt, as_experiments
+from ..tools.residuals import _simulate
 from ..tools.validation import fit_percent
 from .._checks import progress_bar
 
@@ -283,14 +283,6 @@ def _grid(value, keys, default, argname):
     return list(dict.fromkeys(out))          # drop repeats, keep the order
 
 
-def _args(exps):
-    """Positional data arguments of `identify`/`identify_linear`: one
-    experiment as arrays, several as a list of pairs."""
-    if len(exps) == 1:
-        return exps[0]
-    return (list(exps),)
-
-
 def _centred(exps):
     """The experiments with their means of u and y removed."""
     out = type(exps)([(u - u.mean(), y - y.mean()) for u, y in exps],
@@ -412,6 +404,41 @@ def select_structure(data, orders=None, delays=None, validation=None,
     ['sandwich', 'sandwich', 'linear', 'linear']
     >>> model = table.best_model            # a SandwichSystem, ready to use
     """
+    _check_arguments(criterion, include_linear, identify_options)
+    structures = [o + q for o in _grid(orders, _ORDER_KEYS, DEFAULT_ORDERS,
+                                       'orders')
+                  for q in _grid(delays, _DELAY_KEYS, DEFAULT_DELAYS,
+                                 'delays')]
+    if len(structures) > MAX_ROWS:
+        raise ValueError(
+            f"orders x delays make {len(structures)} structures, more than "
+            f"{MAX_ROWS}; each costs one identification: narrow the grid "
+            f"around what the physics suggests")
+    options = {k: v for k, v in identify_options.items()
+               if k not in ('dt', 'offsets')}
+    est, val = _read(data, validation, identify_options.get('dt'))
+    linears = []
+    if include_linear:
+        linears = list(dict.fromkeys(
+            (nb + nd + 1, na + nc, q1 + q2)
+            for na, nb, nc, nd, q1, q2 in structures))
+    start = time.perf_counter()
+    with progress_bar(progress, total=len(structures) + len(linears),
+                      desc='select_structure') as bar:
+        rows = [_identify_row(s, est, options, bar) for s in structures]
+        rows += [_linear_row(o, est, options.get('integrators', 'auto'),
+                             bar) for o in linears]
+    for row in rows:
+        _score(row, est, val, est.n_samples)
+    _rank(rows, 'fit_validation' if val is not None else criterion,
+          -1.0 if val is not None else 1.0)
+    return StructureTable(rows, criterion, val is not None,
+                          time.perf_counter() - start)
+
+
+def _check_arguments(criterion, include_linear, identify_options):
+    """select_structure's own arguments, and the identify options that
+    its grids or its own arguments decide."""
     if criterion not in _CRITERIA:
         raise ValueError(f"criterion must be one of {list(_CRITERIA)}; got "
                          f"{criterion!r}")
@@ -425,18 +452,7 @@ def select_structure(data, orders=None, delays=None, validation=None,
                         f"options: the orders and delays come from the "
                         f"`orders` and `delays` grids, and `progress` is "
                         f"select_structure's own")
-    structures = [o + q for o in _grid(orders, _ORDER_KEYS, DEFAULT_ORDERS,
-                                       'orders')
-                  for q in _grid(delays, _DELAY_KEYS, DEFAULT_DELAYS,
-                                 'delays')]
-    if len(structures) > MAX_ROWS:
-        raise ValueError(
-            f"orders x delays make {len(structures)} structures, more than "
-            f"{MAX_ROWS}; each costs one identification: narrow the grid "
-            f"around what the physics suggests")
-    options = dict(identify_options)
-    dt = options.pop('dt', None)
-    offsets = options.pop('offsets', 'mean')
+    offsets = identify_options.get('offsets', 'mean')
     if offsets != 'mean':
         raise ValueError(
             f"select_structure removes the means of u and y of every "
@@ -444,7 +460,14 @@ def select_structure(data, orders=None, delays=None, validation=None,
             f"free run from rest on the same centred data; got offsets="
             f"{offsets!r}. Remove offsets another way before the search if "
             f"means do not suit the data")
-    est = _read(data, 'data')
+
+
+def _read(data, validation, dt):
+    """(estimation, validation or None) experiments (`as_experiments`),
+    with the sampling time `dt` if given, centred: the identifiers get the
+    centred data (so offsets='none' for them), and the scores are
+    computed on the same centred copies."""
+    est = as_experiments(data)
     if dt is not None:
         if est.dt is True:
             est = type(est)(est, _check_dt(dt))
@@ -453,50 +476,39 @@ def select_structure(data, orders=None, delays=None, validation=None,
                              f"step {est.dt:g}")
     val = None
     if validation is not None:
-        val = _read(validation, 'validation')
-        val = type(val)(val, _same_dt(val.dt, est.dt))
-    # the identifiers get the centred data (so offsets='none' for them),
-    # and the scores are computed on the same centred copies
-    est = _centred(est)
-    val = None if val is None else _centred(val)
-    n = est.n_samples
+        try:
+            val = as_experiments(validation)
+        except (TypeError, ValueError) as err:
+            raise type(err)(f"validation: {err}") from None
+        val = _centred(type(val)(val, _same_dt(val.dt, est.dt)))
+    return _centred(est), val
 
-    linears = []
-    if include_linear:
-        linears = list(dict.fromkeys(
-            (nb + nd + 1, na + nc, q1 + q2)
-            for na, nb, nc, nd, q1, q2 in structures))
-    integ = options.get('integrators', 'auto')
-    start = time.perf_counter()
-    rows = []
-    with progress_bar(progress, total=len(structures) + len(linears),
-                      desc='select_structure') as bar:
-        for s in structures:
-            o = dict(zip(_ORDER_KEYS + _DELAY_KEYS, s))
-            label = (f"sandwich {s[0]}/{s[1]}/{s[2]}/{s[3]}, "
-                     f"q {s[4]}/{s[5]}")
-            bar.set_postfix_str(label)
-            res, error, caught, seconds = _run(
-                lambda: identify(*_args(est), **o, dt=est.dt, offsets='none',
-                                 **options),
-                bar)
-            rows.append(_row('sandwich', label, o, res, error, caught,
-                             seconds))
-        for nb, nf, nk in linears:
-            o = dict(nb=nb, nf=nf, nk=nk)
-            label = f"linear OE nb={nb} nf={nf} nk={nk}"
-            bar.set_postfix_str(label)
-            res, error, caught, seconds = _run(
-                lambda: identify_linear(*_args(est), **o, dt=est.dt,
-                                        integrators=integ, offsets='none'),
-                bar)
-            rows.append(_row('linear', label, o, res, error, caught,
-                             seconds))
-    for row in rows:
-        _score(row, est, val, n)
-    key = 'fit_validation' if val is not None else criterion
-    sign = -1.0 if val is not None else 1.0
 
+def _identify_row(s, est, options, bar):
+    """The row of the sandwich structure s = (na, nb, nc, nd, q1, q2)."""
+    o = dict(zip(_ORDER_KEYS + _DELAY_KEYS, s))
+    label = f"sandwich {s[0]}/{s[1]}/{s[2]}/{s[3]}, q {s[4]}/{s[5]}"
+    bar.set_postfix_str(label)
+    run = _run(lambda: identify(est, **o, dt=est.dt, offsets='none',
+                                **options), bar)
+    return _row('sandwich', label, o, run)
+
+
+def _linear_row(shape, est, integrators, bar):
+    """The row of the linear output-error model shape = (nb, nf, nk)."""
+    nb, nf, nk = shape
+    o = dict(nb=nb, nf=nf, nk=nk)
+    label = f"linear OE nb={nb} nf={nf} nk={nk}"
+    bar.set_postfix_str(label)
+    run = _run(lambda: identify_linear(est, **o, dt=est.dt,
+                                       integrators=integrators,
+                                       offsets='none'), bar)
+    return _row('linear', label, o, run)
+
+
+def _rank(rows, key, sign):
+    """Sort the rows (successes first, then by `key` times `sign`) and
+    number them; warn if none succeeded."""
     def rank(row):
         value = row[key]
         bad = value is None or not np.isfinite(value)
@@ -509,9 +521,7 @@ def select_structure(data, orders=None, delays=None, validation=None,
         warnings.warn(
             "select_structure: no candidate was identified successfully; "
             "the table ranks them anyway (see rows[i]['message'] before "
-            "using best_model)", RuntimeWarning, stacklevel=2)
-    return StructureTable(rows, criterion, val is not None,
-                          time.perf_counter() - start)
+            "using best_model)", RuntimeWarning, stacklevel=3)
 
 
 def _same_dt(dt, wanted):
@@ -526,7 +536,9 @@ def _same_dt(dt, wanted):
     return dt
 
 
-def _row(kind, label, orders, res, error, caught, seconds):
+def _row(kind, label, orders, run):
+    """A table row from `_run`'s (result, error, warnings, seconds)."""
+    res, error, caught, seconds = run
     row = {'rank': None, 'kind': kind, 'structure': label,
            'orders': orders, 'n_params': None, 'fit_validation': None,
            'aic': None, 'bic': None, 'fit': None, 'p_value': None,

@@ -4,7 +4,8 @@ Every function that takes measured data (`identify`, `identify_linear`,
 `refine`, `compare`, `residuals`, `select_structure`) reads it through
 `as_experiments`, so they all accept the same forms:
 
-- ``u, y``: two 1-D arrays of the same length (one experiment);
+- ``u, y``: two 1-D arrays of the same length (one experiment), as two
+  arguments or as one ``(u, y)`` pair;
 - a `control.TimeResponseData` with one input and one output (for
   example from ``ct.input_output_response`` or a logged record wrapped as
   ``ct.TimeResponseData(t, y, inputs=u)``); its time vector gives dt;
@@ -60,6 +61,16 @@ class Experiments(list):
     def y(self):
         """The outputs, one array per experiment."""
         return [y for _, y in self]
+
+
+def _is_signal(value):
+    """True for a 1-D array-like of numbers (one signal)."""
+    if isinstance(value, ct.TimeResponseData):
+        return False
+    try:
+        return np.asarray(value, dtype=float).ndim == 1
+    except (TypeError, ValueError):
+        return False
 
 
 def _time_step(t, where):
@@ -134,8 +145,9 @@ def as_experiments(u, y=None, dt=None):
 
     Parameters
     ----------
-    u : array_like, control.TimeResponseData or list
-        The input (with `y`), a record, or a list of experiments.
+    u : array_like, tuple, control.TimeResponseData or list
+        The input (with `y`), one ``(u, y)`` pair, a record, or a list of
+        experiments.
     y : array_like, optional
         The output, when `u` is an array.
     dt : float or True, optional
@@ -160,6 +172,8 @@ def as_experiments(u, y=None, dt=None):
     >>> data = sw.as_experiments([rec, rec])
     >>> len(data), data.dt
     (2, 0.01)
+    >>> len(sw.as_experiments((np.sin(t), np.cos(t))))      # one (u, y)
+    1
     """
     dt = _check_dt(dt)
     if y is not None:
@@ -170,6 +184,9 @@ def as_experiments(u, y=None, dt=None):
         items, names = [(u, y)], ['the data']
     elif isinstance(u, ct.TimeResponseData):
         items, names = [u], ['the record']
+    elif (isinstance(u, (list, tuple)) and len(u) == 2
+          and _is_signal(u[0]) and _is_signal(u[1])):
+        items, names = [tuple(u)], ['the data']
     elif isinstance(u, (list, tuple)):
         if len(u) == 0:
             raise ValueError("the list of experiments is empty")
@@ -177,8 +194,9 @@ def as_experiments(u, y=None, dt=None):
         names = [f"experiment {i}" for i in range(len(items))]
     else:
         raise TypeError(
-            f"data must be u and y arrays, a control.TimeResponseData or a "
-            f"list of experiments; got {type(u).__name__} without y")
+            f"data must be u and y arrays, a (u, y) pair, a "
+            f"control.TimeResponseData or a list of experiments; got "
+            f"{type(u).__name__} without y")
     pairs, steps = [], []
     for item, where in zip(items, names):
         uu, yy, step = _one(item, where)

@@ -158,21 +158,6 @@ class ResidualResult:
             f"defect)")
 
 
-def _read(data, name='data'):
-    """`as_experiments` of `data`, also taking one (u, y) pair as a tuple."""
-    if (isinstance(data, (tuple, list)) and len(data) == 2
-            and not any(isinstance(d, (ct.TimeResponseData, tuple, list))
-                        for d in data)
-            and all(np.ndim(d) == 1 for d in data)):
-        return as_experiments(data[0], data[1])
-    try:
-        return as_experiments(data)
-    except (TypeError, ValueError) as err:
-        if name == 'data':
-            raise
-        raise type(err)(f"{name}: {err}") from None
-
-
 def _simulate(model, u, dt):
     """Free-run output of `model` from rest on the input u (one
     experiment)."""
@@ -296,7 +281,7 @@ def residuals(model, data, lags=25, ax=None, plot=True):
     >>> bad.outside_auto > 10
     True
     """
-    exps = _read(data)
+    exps = as_experiments(data)
     model = _check_model(model, exps.dt)
     shortest = min(u.size for u in exps.u)
     lags = check_int('lags', lags, minimum=1)

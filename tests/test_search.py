@@ -1,13 +1,21 @@
-"""The search moves of `identify(method='oe')`: the L2 re-fit to the
-model's own backlash output, and the cheap series-parallel cost."""
+"""The search of `identify(method='oe')` (`_search`) and its starts
+(`_starts`): the L2 re-fit to the model's own backlash output, the cheap
+series-parallel cost, hops, relocations and the screening samples."""
 
 import numpy as np
 import pytest
 
 import sandwichctl as sw
-from sandwichctl.identification._nested import refit_l2
-from sandwichctl.identification._oe import Structure
-from sandwichctl.identification.batch import Problem
+from sandwichctl.identification._lm import lm
+from sandwichctl.identification._options import OEOptions
+from sandwichctl.identification._problem import Parametrisation, Problem
+from sandwichctl.identification._search import Search, Task, refit_l2
+
+
+def _search(prob):
+    """A `Search` over the problem `prob` alone (default options)."""
+    task = Task(prob.u_user, prob.y_user, prob.orders, OEOptions())
+    return Search(task, None, 0, probs={prob.sign: prob})
 
 
 def _perturbed_l2(st, phi, rng):
@@ -64,7 +72,7 @@ def test_refit_l2_keeps_an_integrator_in_l2():
 
 def test_refit_l2_declines_a_start_it_cannot_use():
     """A model whose backlash output is identically zero gives no start."""
-    st = Structure(1, 0, 1, 0, 1, 1)
+    st = Parametrisation((1, 0, 1, 0, 1, 1))
     phi = np.array([-0.5, -0.5, 1.0, 1.0, 10.0, 10.0])
     u = [0.01 * np.sin(0.1 * np.arange(300))]
     y = [np.cos(0.1 * np.arange(300))]
@@ -79,7 +87,7 @@ def test_series_parallel_cost_equals_the_jacobian_residuals(orders, inits):
     residuals the Jacobian path returns, offsets and initial conditions
     included."""
     rng = np.random.default_rng(0)
-    st = Structure(*orders, n_offsets=2, n_inits=inits)
+    st = Parametrisation(tuple(orders), n_offsets=2, n_inits=inits)
     u = [rng.standard_normal(400), rng.standard_normal(250)]
     y = [rng.standard_normal(400), rng.standard_normal(250)]
     phi = np.zeros(st.size)
@@ -94,16 +102,13 @@ def test_series_parallel_cost_equals_the_jacobian_residuals(orders, inits):
 def test_a_hop_never_raises_the_cost_and_is_seeded():
     """A perturbed restart keeps the better model, and the same generator
     state gives the same result."""
-    from sandwichctl.identification.pipeline import _hop, _oe_options
-    from sandwichctl.identification._oe import lm
     plant = sw.examples.paper_plant()
     u = sw.examples.paper_input(1200, seed=8)
     y = sw.examples.add_noise(plant.simulate(u).outputs, 20, seed=9)
     prob = Problem(u, y, plant.orders)
     start = prob.phi_of_model(plant) * 1.3
     best = dict(lm(prob.st, start, prob.u, prob.y, max_iter=3), sign=1)
-    opt = _oe_options({})
-    outs = [_hop(prob, best, opt, np.random.default_rng(4))
+    outs = [_search(prob)._hop(best, np.random.default_rng(4))
             for _ in range(2)]
     assert outs[0]['cost'] <= best['cost']
     np.testing.assert_array_equal(outs[0]['phi'], outs[1]['phi'])
@@ -125,9 +130,9 @@ def test_relocations_move_one_root_and_keep_the_spread_of_x():
     """Each candidate differs from the start in one real root or one
     conjugate pair of L1's poles or zeros; the slopes and widths follow
     the spread of x = L1[u], so the backlash output keeps its size."""
-    from sandwichctl.identification._moves import relocations, l1_std
+    from sandwichctl.identification._starts import relocations, l1_std
     rng = np.random.default_rng(3)
-    st = Structure(3, 2, 2, 1, 1, 1)
+    st = Parametrisation((3, 2, 2, 1, 1, 1))
     u = [rng.standard_normal(800)]
     phi = np.zeros(st.size)
     phi[:st.nc_free] = np.poly([0.5, -0.2])[1:]
@@ -161,10 +166,6 @@ def test_relocations_leave_the_valley_of_a_wrong_l1_pole():
     a wrong valley, one round of relocations never raises the cost and
     recovers the plant exactly in most cases (11 of 17 when written)."""
     from sandwichctl.data import random_case
-    from sandwichctl.identification._oe import lm
-    from sandwichctl.identification.pipeline import (_relocate, _oe_options,
-                                                      _head)
-    opt = _oe_options({})
     stuck, recovered = 0, 0
     for seed in range(40):
         case = random_case(seed, snr=np.inf, n=1500,
@@ -186,9 +187,7 @@ def test_relocations_leave_the_valley_of_a_wrong_l1_pole():
         if out['cost'] < 1e-4 * energy:
             continue                        # the descent got there alone
         stuck += 1
-        head = (st, _head(prob.u, opt['screen_samples']),
-                _head(prob.y, opt['screen_samples']))
-        moved = _relocate(prob, head, out, opt)
+        moved = _search(prob).step9_relocations(out)
         assert moved['cost'] <= out['cost']
         recovered += moved['cost'] < 1e-12 * energy
     assert stuck >= 10
@@ -196,7 +195,7 @@ def test_relocations_leave_the_valley_of_a_wrong_l1_pole():
 
 
 def test_screening_uses_the_leading_samples_of_each_experiment():
-    from sandwichctl.identification.pipeline import _head
+    from sandwichctl.identification._search import _head
     parts = [np.arange(3000.0), np.arange(1000.0)]
     heads = _head(parts, 2000)
     assert [h.size for h in heads] == [1500, 500]

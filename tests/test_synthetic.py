@@ -1,14 +1,11 @@
-"""Tests of sandwichctl.data: random sandwich cases and the servo drive."""
+"""Tests of sandwichctl.data.synthetic: random sandwich cases, their
+families and excitations."""
 
 import numpy as np
 import pytest
-from scipy.optimize import least_squares
-from scipy.signal import lfilter
 
 from sandwichctl.data import (excitation, random_case, random_family,
-                              family_specs, KINDS, SNRS, N_RANGE,
-                              servo_drive, drive_reference, drive_case,
-                              DRIVE_PARAMETERS)
+                              family_specs, KINDS, SNRS, N_RANGE)
 
 SEEDS = range(24)
 
@@ -222,92 +219,3 @@ def test_random_family_yields_the_specified_cases():
                                                n_range=(2000, 2500))):
         assert case.spec == spec
         np.testing.assert_array_equal(case.y, random_case(**spec).y)
-
-
-# ----------------------------------------------------------------------
-# servo drive
-# ----------------------------------------------------------------------
-def _oe_fit_percent(u, y, u_val, y_val, nb=3, nf=3, nk=1):
-    """Fit % on validation data of a linear output-error model (scipy)."""
-    su, sy = np.std(u), np.std(y)
-    un, yn = u / su, y / sy
-    n0 = max(nf, nk + nb)
-    phi = np.column_stack(
-        [-yn[n0 - i:yn.size - i] for i in range(1, nf + 1)]
-        + [un[n0 - nk - j:un.size - nk - j] for j in range(nb)])
-    theta0 = np.linalg.lstsq(phi, yn[n0:], rcond=None)[0]   # ARX start
-
-    def simulate(theta, inp):
-        return lfilter(np.r_[np.zeros(nk), theta[nf:]],
-                       np.r_[1.0, theta[:nf]], inp)
-
-    def residual(theta):
-        if np.max(np.abs(np.roots(np.r_[1.0, theta[:nf]]))) >= 1:
-            return np.full(yn.size, 1e3)
-        return yn - simulate(theta, un)
-
-    theta = least_squares(residual, theta0, method='lm', max_nfev=400).x
-    yhat = sy * simulate(theta, u_val / su)
-    return 100 * (1 - np.linalg.norm(y_val - yhat)
-                  / np.linalg.norm(y_val - y_val.mean()))
-
-
-def test_drive_is_deterministic_and_quantised():
-    ref = drive_reference(1500, 'position', rng=2)
-    y1 = servo_drive(ref, seed=5)
-    y2 = servo_drive(ref, seed=5)
-    np.testing.assert_array_equal(y1, y2)
-    assert not np.array_equal(y1, servo_drive(ref, seed=6))
-    counts = y1 / 1e-6
-    assert np.max(np.abs(counts - np.round(counts))) < 1e-6
-    assert y1[0] == 0.0
-    # moves a few mm
-    assert 1e-3 < np.ptp(y1) < 1e-2
-    a, b = drive_case(4, n=1000), drive_case(4, n=1000)
-    np.testing.assert_array_equal(a.y_val, b.y_val)
-    assert not np.array_equal(a.u, a.u_val[:1000])
-
-
-def test_drive_follows_position_reference():
-    ref = np.r_[np.zeros(10), np.ones(490)]
-    y, sig = servo_drive(ref, play=0.0, seed=0, internal=True)
-    lead = DRIVE_PARAMETERS['lead'][0]
-    assert abs(sig['theta'][-1] - 1) < 1e-3
-    assert abs(y[-1] - lead / (2 * np.pi)) < 3e-6
-    assert np.all(np.abs(sig['torque']) <= DRIVE_PARAMETERS['T_max'][0])
-
-
-def test_speed_loop_output_integrates_the_reference():
-    case = drive_case(1, 'speed', n=3000)
-    lead = DRIVE_PARAMETERS['lead'][0]
-    ideal = lead / (2 * np.pi) * np.cumsum(case.u) * case.dt
-    # tracks the integral up to the loop lag and the play
-    assert np.corrcoef(case.y, ideal)[0, 1] > 0.999
-    assert np.max(np.abs(case.y - ideal)) < 0.1 * np.ptp(ideal)
-    # the reference is zero mean and the position stays within a few cm
-    assert abs(case.u.mean()) < 1e-9
-    assert np.max(np.abs(case.y)) < 0.05
-
-
-def test_play_degrades_a_linear_fit():
-    fits = {}
-    for play in (0.0, 200e-6):
-        c = drive_case(0, 'position', play, n=2000)
-        assert c.play == play and c.loop == 'position'
-        fits[play] = _oe_fit_percent(c.u, c.y, c.u_val, c.y_val)
-    assert fits[0.0] > 97
-    assert 2 < fits[0.0] - fits[200e-6] < 15
-
-
-def test_drive_argument_checks():
-    ref = np.zeros(10)
-    with pytest.raises(ValueError, match='loop'):
-        servo_drive(ref, loop='torque')
-    with pytest.raises(ValueError, match='play'):
-        servo_drive(ref, play=-1e-6)
-    with pytest.raises(TypeError, match='unknown servo-drive parameter'):
-        servo_drive(ref, mass=3.0)
-    with pytest.raises(ValueError, match='Kv'):
-        servo_drive(ref, Kv=0.0)
-    with pytest.raises(ValueError, match='reference'):
-        servo_drive([0.0, np.nan])

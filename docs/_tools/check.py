@@ -24,7 +24,7 @@ nothing from the network (tests/test_docs.py checks that too).
 
 Usage::
 
-    python tools/docs_check.py [--no-build] [--page notebooks/quickstart]...
+    python docs/_tools/check.py [--no-build] [--page notebooks/quickstart]...
 """
 
 import argparse
@@ -36,7 +36,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / 'docs'
 HTML = DOCS / '_build' / 'html'
 SHOTS = DOCS / '_build' / 'screenshots'

@@ -215,8 +215,8 @@ def test_a_zero_on_the_search_bound_is_not_a_success():
     (the zero trades against the slope and the width): success=False,
     and the message says which block; the same model a little inside is
     judged normally."""
-    from sandwichctl.identification._oe import lm
-    from sandwichctl.identification.batch import Problem
+    from sandwichctl.identification._lm import lm
+    from sandwichctl.identification._problem import Problem
     plant = sw.SandwichSystem.from_coefficients(
         a=[-0.6], b=[0.3, 0.1], c=[-0.5], d=[0.2, 0.05], m1=1.0, m2=1.0,
         D1=0.1, D2=0.1, dt=1)
@@ -265,7 +265,7 @@ def test_a_degenerate_best_start_is_retried_from_the_next_one():
     the next converged start, polished the same way, recovers the plant,
     and the result is a success with no zero on the bound."""
     from sandwichctl.data import family_specs
-    from sandwichctl.identification.batch import Problem
+    from sandwichctl.identification._problem import Problem
     spec = {s['seed']: s for s in family_specs(80, seed=3)}[849571562]
     case = random_case(**spec)
     res = sw.identify(case.u, case.y, **case.orders)

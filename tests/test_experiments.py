@@ -130,3 +130,34 @@ def test_initial_state_estimate_recovers_a_plant_not_at_rest():
     assert ic['y_past'].size == 2
     with pytest.raises(ValueError, match='initial_state'):
         sw.identify(u, y, **plant.orders, initial_state='guess')
+
+
+@pytest.fixture(scope='module')
+def pair():
+    plant = sw.examples.paper_plant()
+    u = sw.examples.paper_input(1000, seed=3)
+    y = sw.examples.add_noise(plant.simulate(u).outputs, 100, seed=4)
+    return plant, (u, y)
+
+
+def test_a_u_y_tuple_works_at_every_entry_point(pair):
+    """`as_experiments` reads one (u, y) pair, and every entry point reads
+    its data through it."""
+    plant, (u, y) = pair
+    data = sw.as_experiments((u, y))
+    assert len(data) == 1 and data.dt is True
+    np.testing.assert_array_equal(data.u[0], u)
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        res = sw.identify((u, y), **plant.orders)
+        np.testing.assert_array_equal(
+            res.theta, sw.identify(u, y, **plant.orders).theta)
+        assert sw.identify_linear((u, y), nb=3, nf=4, nk=2).model is not None
+        assert sw.refine(plant, (u, y)).success
+        assert sw.compare(plant, (u, y), plot=False).fit > 80
+        assert sw.residuals(plant, (u, y), plot=False) is not None
+        table = sw.select_structure((u, y), orders=[(2, 0, 2, 1)],
+                                    include_linear=False)
+        assert table.best['success']
+        many, = sw.identify_many([(u, y)], **plant.orders, processes=1)
+        np.testing.assert_array_equal(many.theta, res.theta)

@@ -1,38 +1,38 @@
-r"""Output-error fitting of a sandwich structure (private).
+r"""The scaled output-error problem and its parametrisation (private).
 
 The batch identifiers (`refine`, `identify`) minimise the output-error
-cost (2.6) in a *reduced* parameter vector phi of a `Structure`:
+cost (2.6) in a *reduced* parameter vector phi of a `Parametrisation`:
 
-- the data are scaled by the caller (u / su, s y / sy), so the numbers the
+- the data are scaled (`Problem`: u / su, s y / sy), so the numbers the
   optimiser sees do not depend on the data's units, and the sign s of the
   overall gain is taken out of the parameters (the backlash slopes stay
   positive);
 - poles fixed at z = 1 (integrators) are factored out of L1's or L2's
   denominator, ``A(q) = (1 - q^-1)^i A'(q)``, so that only A' is free and
-  only A' must stay stable.
+  only A' must stay stable;
+- output offsets and initial conditions per experiment, when estimated,
+  follow the model's parameters in phi.
 
 The full parameter vector of eq. (2.5), theta, is the affine image
 ``theta = t0 + T phi``: the Jacobian of the simulated output with respect
-to phi is ``J_theta T``. Levenberg-Marquardt steps are solved as box QPs
-(m1, m2 >= m_min, D1, D2 >= 0); a step is accepted only if the cost
-decreases and the free denominators stay stable, which copes with the
-kinks of the cost (see `refine`).
+to phi is ``J_theta T``. The solver is `_lm.lm`; `Problem.result` maps its
+output to an `IdentificationResult` in the user's units and judges it
+(`result.verdict`).
 """
 
 import numpy as np
 
+from ._data import scale as _scale, scaled
 from ._predictor import (simulate_with_sensitivities, oe_output, sp_output,
-                         smooth_output, is_stable, init_sizes)
-from ._qp import box_qp, QPError
+                         smooth_output, is_stable, init_sizes, oe_signals)
+from .result import (IdentificationResult, backlash_significance,
+                     whiteness, verdict, judge, MIN_FIT)
+from ..model.sandwich import SandwichSystem
 
 __all__ = []
 
 #: Free poles are kept inside |z| < 1 - STABILITY_MARGIN.
 STABILITY_MARGIN = 1e-4
-#: A run stopped at max_iter counts as converged when its last decrease
-#: and the Gauss-Newton prediction of what is left are both below this
-#: share of the output's energy (the fit would change in its sixth digit).
-CONVERGED = 1e-6
 #: Zeros of L1 and L2 are kept inside |z| < ZERO_RADIUS (or the start's
 #: largest zero times 1.5, if larger): with b0 = d0 = 1 a zero escaping to
 #: infinity trades for a vanishing slope m and a growing width D, a
@@ -48,19 +48,26 @@ def integrator_poly(i):
     return p
 
 
-class Structure:
+class Parametrisation:
     """Orders, delays and integrators of a sandwich; the map phi -> theta.
 
     Parameters
     ----------
-    na, nb, nc, nd, q1, q2 : int
-        Orders of eq. (2.1), integrators included in na and nc.
+    orders : tuple of int
+        (na, nb, nc, nd, q1, q2): orders of eq. (2.1), integrators
+        included in na and nc, and the delays.
     i1, i2 : int
         Poles fixed at z = 1 in L1 and L2.
+    zero_radius : float
+        Zeros are kept inside this radius (see `ZERO_RADIUS`).
+    n_offsets, n_inits : int
+        Experiments with an output offset, and with initial conditions,
+        estimated (their entries follow the model's in phi).
     """
 
-    def __init__(self, na, nb, nc, nd, q1, q2, i1=0, i2=0,
-                 zero_radius=ZERO_RADIUS, n_offsets=0, n_inits=0):
+    def __init__(self, orders, i1=0, i2=0, *, zero_radius=ZERO_RADIUS,
+                 n_offsets=0, n_inits=0):
+        na, nb, nc, nd, q1, q2 = orders
         if not (0 <= i1 <= na and 0 <= i2 <= nc):
             raise ValueError(f"integrators ({i1}, {i2}) exceed the orders "
                              f"na = {na}, nc = {nc}")
@@ -175,7 +182,7 @@ class Structure:
         phi[im + 2:im + 4] = np.maximum(phi[im + 2:im + 4], 0.0)
         return phi
 
-    def _init_jacobian(self, phi, e, u, yhat, theta, sp, ymeas):
+    def _init_jacobian(self, phi, e, u, yhat, *, theta, sp, ymeas):
         """Columns for every experiment's initial conditions: those of
         experiment e by forward differences, the others zero."""
         out = np.zeros((u.size, self.n_inits * self.n_init))
@@ -249,8 +256,9 @@ class Structure:
                 ind[:, e] = 1.0
                 cols.append(ind)
             if self.n_inits:
-                cols.append(self._init_jacobian(phi, e, uu, yhat, theta,
-                                                sp, yy - off[e]))
+                cols.append(self._init_jacobian(phi, e, uu, yhat,
+                                                theta=theta, sp=sp,
+                                                ymeas=yy - off[e]))
             J = np.hstack(cols) if len(cols) > 1 else J
             rs.append(yy - yhat - off[e])
             Js.append(J)
@@ -260,112 +268,148 @@ class Structure:
         return np.concatenate(rs), np.vstack(Js), np.concatenate(zs)
 
 
-def _step(A, g, lo, hi):
-    """Minimise 0.5 d'A d - g'd over lo <= d <= hi (None if it fails).
+def unit_poles(den, tol=1e-9):
+    """How many roots of the monic denominator 1, a1, ... sit at z = 1."""
+    poly = np.r_[1.0, den]
+    count = 0
+    while poly.size > 1 and abs(np.polyval(poly, 1.0)) <= tol * np.sum(
+            np.abs(poly)):
+        poly = np.polydiv(poly, [1.0, -1.0])[0]
+        count += 1
+    return count
 
-    The unconstrained minimiser is tried first (the bounds rarely bind);
-    piqp solves the box QP otherwise.
+
+class Problem:
+    """A scaled output-error problem: data, structure, sign (private).
+
+    Holds ``u / su`` and ``sign * y / sy`` and maps reduced parameters
+    phi (see `Parametrisation`) to models and results in the user's units.
     """
-    try:
-        d = np.linalg.solve(A, g)
-        if np.all(np.isfinite(d)) and np.all(d >= lo) and np.all(d <= hi):
-            return d
-    except np.linalg.LinAlgError:
-        pass
-    try:
-        return box_qp(A, -g, lo, hi)
-    except QPError:
-        return None
 
+    def __init__(self, u, y, orders, *, i1=0, i2=0, sign=1, dt=True,
+                 name=None, offsets=False, inits=False):
+        us = list(u) if isinstance(u, list) else [u]
+        ys = list(y) if isinstance(y, list) else [y]
+        self.orders = {k: orders[k] for k in ('na', 'nb', 'nc', 'nd', 'q1',
+                                               'q2')}
+        self.st = Parametrisation(tuple(self.orders.values()), i1, i2,
+                                  n_offsets=len(us) if offsets else 0,
+                                  n_inits=len(us) if inits else 0)
+        self.sign = 1 if sign >= 0 else -1
+        self.su = _scale(np.concatenate(us))
+        self.sy = _scale(np.concatenate(ys))
+        self.u_user, self.y_user = us, ys
+        self.u = [scaled(part, self.su) for part in us]
+        self.y = [self.sign * scaled(part, self.sy) for part in ys]
+        self.n_samples = sum(part.size for part in us)
+        self.dt, self.name = dt, name
+        # theta_user = theta_scaled * unit: slopes sy/su, thresholds su
+        im = self.st.im_theta
+        self.unit = np.ones(self.st.p)
+        self.unit[im:im + 2] = self.sy / self.su
+        self.unit[im + 2:im + 4] = self.su
 
-def lm(st, phi, u, y, max_iter=100, tol=1e-10, m_min=1e-9, sp=False,
-       fixed=None):
-    """Levenberg-Marquardt on the output-error cost, from an admissible phi.
+    def phi_of_model(self, model):
+        """Reduced scaled parameters of a model of this structure."""
+        theta = model.normalized().theta / self.unit
+        return self.st.phi(theta)
 
-    Every accepted step lowers the cost and keeps the structure stable, so
-    the final cost is at most the starting cost. With ``sp`` the
-    series-parallel prediction error is minimised instead (a smoother
-    cost, biased under noise: a way to a start). ``fixed`` (a boolean
-    mask) holds some parameters at their values. Returns a dict with phi,
-    cost, J, r, nit, converged and message.
-    """
-    free = slice(None) if fixed is None else ~np.asarray(fixed)
-    r, J, _ = st.jacobian(phi, u, y, sp)
-    cost = 0.5 * float(r @ r)
-    if not (np.isfinite(cost) and np.all(np.isfinite(J))):
-        return dict(phi=phi, cost=np.inf if not np.isfinite(cost) else cost,
-                    J=J, r=r, nit=0, converged=False,
-                    message="the start does not give a finite output and "
-                            "Jacobian")
-    mu = 1e-3
-    message, converged = f"stopped at max_iter = {max_iter}", False
-    last_decrease = np.inf
-    it = 0
-    for it in range(1, max_iter + 1):
-        Jf = J[:, free]
-        A = Jf.T @ Jf
-        g = Jf.T @ r
-        diag = np.diag(A).copy()
-        scale = np.maximum(diag, 1e-12 * max(float(np.max(diag, initial=0)),
-                                             1e-300))
-        lo, hi = st.bounds(phi, m_min)
-        lo, hi = lo[free], hi[free]
-        accepted = False
-        while mu < 1e12:
-            d = _step(A + mu * np.diag(scale), g, lo, hi)
-            if d is None:
-                mu *= 10
-                continue
-            full = np.zeros(phi.size)
-            full[free] = d
-            trial = st.clip(phi + full, m_min)
-            if not st.stable(trial):
-                mu *= 10
-                continue
-            cost_t = st.cost(trial, u, y, sp)
-            if cost_t < cost:
-                accepted = True
-                break
-            mu *= 10
-        if not accepted:
-            message = ("converged: no step decreases the cost (a minimum, "
-                       "possibly at a kink)")
-            converged = True
-            break
-        last_decrease = (cost - cost_t) / max(cost, 1e-300)
-        step = np.linalg.norm(trial - phi)
-        phi = trial
-        r, J, _ = st.jacobian(phi, u, y, sp)
+    def model(self, phi):
+        """The model of phi in the user's units (signed normalisation)."""
+        return SandwichSystem.from_theta(
+            self.st.theta(phi) * self.unit, **self.orders, dt=self.dt,
+            name=self.name, sign=self.sign)
+
+    def result(self, out, method, linear=None, extra=None, min_fit=MIN_FIT):
+        """The `IdentificationResult` of an `_lm.lm` output `out`, judged
+        by `result.verdict`. An `out` with ``fallback`` (the linear fit as
+        a sandwich, see `_search`) is not judged on convergence."""
+        phi = out['phi']
+        theta = self.st.theta(phi) * self.unit
+        n, q = self.n_samples, self.st.size
+        r, cost, fit = self._fit(phi)
+        std = self._std(out, theta)
+        stable = self.st.poles_stable(phi)
+        finite = bool(np.all(np.isfinite(theta)) and np.isfinite(cost))
+        labels = SandwichSystem.from_theta(
+            theta, **self.orders).theta_labels
+        failed = verdict(
+            finite=finite, stable=stable,
+            converged=None if out.get('fallback') else out['converged'],
+            zeros_at_bound=self.st.zeros_at_bound(phi) if stable else [],
+            zero_radius=self.st.zero_radius, fit=fit, min_fit=min_fit,
+            linear=linear, cost_scaled=out['cost'], std=std, theta=theta,
+            labels=labels)
+        res = IdentificationResult(
+            model=self.model(phi), theta=theta, history=np.zeros((0,
+                                                                  theta.size)),
+            errors=r, counts={'iterations': out['nit']},
+            success=True, message=out['message'], method=method,
+            options={}, orders=dict(self.orders), theta_labels=labels,
+            nit=out['nit'], std=std, fit=float(fit), cost=cost,
+            integrators={'L1': self.st.i1, 'L2': self.st.i2},
+            linear=linear, significance=None if linear is None else
+            backlash_significance(linear['cost'], cost, linear['n_params'],
+                                  q, n),
+            whiteness=whiteness(r), converged=bool(out['converged']
+                                                   or out.get('fallback')),
+            n_experiments=len(self.u))
+        judge(res, failed)
+        if self.st.n_off:
+            res.offsets = {'method': 'estimate', 'u': [0.0] * len(self.u),
+                           'y': list(self.sign * self.sy * phi[
+                               self.st.q:self.st.q + self.st.n_off])}
+        if self.st.n_inits:
+            res.initial_conditions = [
+                {'x_past': self.su * x, 'v_past': self.sy * v,
+                 'y_past': self.sign * self.sy * yy}
+                for x, v, yy in (self.st.init(phi, e)
+                                 for e in range(self.st.n_inits))]
+        res.crossing = self._crossing(phi, res.model.backlash)
+        if extra:
+            res.update(extra)
+        return res
+
+    def _fit(self, phi):
+        """(residuals, cost, fit) in the user's units, on the data as
+        given (the search ran on their rounded scaled copy, see
+        `_data.scaled`)."""
+        y_all = np.concatenate(self.y_user)
+        r = self.sign * self.sy * self.st.residuals(
+            phi, [part / self.su for part in self.u_user],
+            [self.sign * part / self.sy for part in self.y_user])
         cost = 0.5 * float(r @ r)
-        mu = max(mu / 3, 1e-9)
-        if not np.all(np.isfinite(J)):
-            message = "stopped: the Jacobian is not finite"
-            break
-        if last_decrease < tol or step < tol * (1 + np.linalg.norm(phi)):
-            message = (f"converged: relative decrease {last_decrease:.1e} "
-                       f"or step {step:.1e} below tol")
-            converged = True
-            break
-    if not converged and np.isfinite(cost) and np.all(np.isfinite(J)):
-        # stopped at max_iter: converged if what is left is negligible, by
-        # the last step and by the Gauss-Newton model of the cost
-        Jf = J[:, free]
-        g = Jf.T @ r
-        A = Jf.T @ Jf
+        denom = np.linalg.norm(y_all - y_all.mean())
+        fit = 100 * (1 - np.linalg.norm(r) / denom) if denom > 0 \
+            else -np.inf
+        return r, cost, fit
+
+    def _std(self, out, theta):
+        """Standard errors of theta, sigma^2 (J'J)^-1 mapped through the
+        parametrisation (inf where J is not finite)."""
+        J = out['J']
+        sigma2 = 2 * out['cost'] / max(self.n_samples - self.st.size, 1)
+        std = np.full(theta.size, np.inf)
+        if np.all(np.isfinite(J)):
+            with np.errstate(all='ignore'):
+                cov_phi = sigma2 * np.linalg.pinv(J.T @ J)
+                T = self.st.T * self.unit[:, None]
+                cov_model = cov_phi[:self.st.q, :self.st.q]
+                std = np.sqrt(np.clip(np.diag(T @ cov_model @ T.T), 0,
+                                      None))
+        return std
+
+    def _crossing(self, phi, backlash):
+        """Where the model's slope lines cross (`Backlash.crossing`, in
+        u's units; None if m1 == m2) and the share of the samples its x
+        spends beyond: {'x': ..., 'share': ...}."""
+        cross = backlash.crossing
+        if cross is None:
+            return {'x': None, 'share': 0.0}
+        theta = self.st.theta(phi)
         with np.errstate(all='ignore'):
-            d = np.linalg.lstsq(A, g, rcond=1e-12)[0]
-        predicted = 0.5 * float(g @ d) / max(cost, 1e-300)
-        # what is left, relative to the output's energy: a change of the
-        # fit in the sixth digit is not worth more iterations
-        yc = np.concatenate(y)
-        energy = 0.5 * float(np.sum((yc - np.mean(yc)) ** 2))
-        share = cost / max(energy, 1e-300)
-        if max(last_decrease, predicted) * share < CONVERGED:
-            converged = True
-            message += (f" (last relative decrease {last_decrease:.1e}, "
-                        f"predicted {predicted:.1e}: converged)")
-        else:
-            message += (f" (last relative decrease {last_decrease:.1e}, "
-                        f"predicted {predicted:.1e})")
-    return dict(phi=phi, cost=cost, J=J, r=r, nit=it, converged=converged,
-                message=message)
+            x = self.su * np.concatenate([
+                oe_signals(theta, self.st.o, uu, self.st.init(phi, e))[1]
+                for e, uu in enumerate(self.u)])
+            beyond = x < cross if backlash.m1 < backlash.m2 else x > cross
+        return {'x': float(cross), 'share': float(np.mean(beyond))}

@@ -8,10 +8,10 @@ import pytest
 
 import sandwichctl as sw
 from sandwichctl.data import random_case
-from sandwichctl.identification._oe import lm
+from sandwichctl.identification._lm import lm
 from sandwichctl.identification._predictor import smooth_output, oe_output
 from sandwichctl.identification._smooth import smooth_refine, _step_spread
-from sandwichctl.identification.batch import Problem
+from sandwichctl.identification._problem import Problem
 
 
 def _case(seed, n=1500):

@@ -1,0 +1,392 @@
+r"""The linear output-error core on scaled data (private).
+
+`fit_oe` fits MATLAB ``oe``'s model y = B(q) / F(q) u(t - nk) + e on
+arrays already scaled to order one (`identify_linear` scales and checks;
+the sandwich search reuses the core for its baseline and its re-fits of
+L2). The method is described in `linear`: integrators factored out by
+integrating the input, an ARX start with unstable roots reflected, a few
+Steiglitz-McBride iterations, then Levenberg-Marquardt with exact
+gradients and every iterate stable. `wants_integrator` is the rule, shared
+by `identify_linear` and `identify`, for when ``integrators='auto'`` tries
+one integrator.
+"""
+
+import numpy as np
+from scipy.signal import lfilter
+
+__all__ = []
+
+RADIUS = 1 - 1e-6        # free poles must satisfy |p| < RADIUS
+_START_RADIUS = 0.999     # reflected start poles are kept inside this
+_BOUNDARY = 1 - 1e-5      # a fit with a free pole beyond this is pinned
+_SM_ITER = 5              # Steiglitz-McBride iterations of the start
+
+
+def _segs(x):
+    """Experiments as a list of arrays (one array is one experiment)."""
+    return list(x) if isinstance(x, (list, tuple)) else [x]
+
+
+def _split(x, like):
+    """Cut the concatenated array x into pieces as long as `like`'s."""
+    out, at = [], 0
+    for part in like:
+        out.append(x[at:at + part.size])
+        at += part.size
+    return out
+
+
+def _filt(b, a, x):
+    """lfilter over each experiment from zero initial conditions,
+    concatenated."""
+    return np.concatenate([lfilter(b, a, part) for part in _segs(x)])
+
+
+def _delays(x, first, count):
+    """Matrix whose column j is x delayed by first + j samples (zero ICs),
+    experiment by experiment."""
+    if isinstance(x, (list, tuple)):
+        return np.vstack([_delays(part, first, count) for part in x])
+    n = x.size
+    out = np.zeros((n, count))
+    for j in range(count):
+        d = first + j
+        if d < n:
+            out[d:, j] = x[:n - d]
+    return out
+
+
+def max_root(fp):
+    """Largest root modulus of the monic polynomial fp (0 if constant)."""
+    if fp.size <= 1:
+        return 0.0
+    if not np.all(np.isfinite(fp)):
+        return np.inf
+    if fp.size == 2:
+        return abs(fp[1])
+    return float(np.max(np.abs(np.roots(fp))))
+
+
+def _simulate(b, fp, v, nk):
+    """yhat = q^-nk B / F' v from zero initial conditions."""
+    return _filt(np.concatenate([np.zeros(nk), b]), fp, v)
+
+
+def _offsets_signal(parts, offsets):
+    """One constant per experiment, as long as `parts`, concatenated."""
+    return np.concatenate([np.full(part.size, c)
+                           for part, c in zip(parts, offsets)])
+
+
+def fit_output(fit, u, nk):
+    """The output of a `fit_oe` result `fit` (its B, F with the
+    integrators, and offsets) on the inputs `u` (a list of experiments;
+    zero initial conditions)."""
+    u = _segs(u)
+    return _simulate(fit['B'], fit['F'], u, nk) + _offsets_signal(
+        u, fit['offsets'])
+
+
+def _cost(y, yhat):
+    r = y - yhat
+    c = 0.5 * (r @ r)
+    return c if np.isfinite(c) else np.inf
+
+
+def _lstsq(phi, y):
+    """Least squares by column-scaled normal equations, refined once.
+
+    Much faster than a QR for N >> p; the refinement step recovers most
+    of the accuracy lost by squaring the condition number.
+    """
+    d = np.linalg.norm(phi, axis=0)
+    d = np.where(d > 0, d, 1.0)
+    a = (phi.T @ phi) / np.outer(d, d)
+    x = np.linalg.lstsq(a, (phi.T @ y) / d, rcond=None)[0]
+    x = x + np.linalg.lstsq(a, (phi.T @ (y - phi @ (x / d))) / d,
+                            rcond=None)[0]
+    return x / d
+
+
+def _centred(x, segs, offsets):
+    """x (samples stacked over the experiments `segs`, rows for a matrix)
+    with each experiment's mean removed, if `offsets`: least squares on
+    centred columns is least squares with a constant per experiment."""
+    if not offsets:
+        return x
+    return np.concatenate([part - part.mean(axis=0)
+                           for part in _split(x, segs)])
+
+
+def _arx(v, y, nb, m, nk, offsets=False):
+    """ARX least squares: F'(q) y = q^-nk B(q) v (+ a constant per
+    experiment with `offsets`) + e; returns b, F'."""
+    segs = _segs(y)
+    theta = _lstsq(
+        _centred(np.hstack([_delays(v, nk, nb), -_delays(y, 1, m)]), segs,
+                 offsets),
+        _centred(np.concatenate(segs), segs, offsets))
+    return theta[:nb], np.concatenate([[1.0], theta[nb:]])
+
+
+def _b_given_f(v, y, fp, nb, nk, offsets=False):
+    """Least-squares B for a fixed denominator F'."""
+    segs = _segs(y)
+    return _lstsq(
+        _centred(_delays(_split(_filt([1.0], fp, v), _segs(v)), nk, nb),
+                 segs, offsets),
+        _centred(np.concatenate(segs), segs, offsets))
+
+
+def _stabilise(fp):
+    """Reflect roots outside the unit circle in, keep them < _START_RADIUS."""
+    if fp.size <= 1 or max_root(fp) < _START_RADIUS:
+        return fp
+    roots = np.roots(fp)
+    mag = np.abs(roots)
+    roots = np.where(mag > 1, roots / mag ** 2, roots)     # 1 / conj(p)
+    mag = np.abs(roots)
+    roots = np.where(mag > _START_RADIUS, roots * _START_RADIUS / mag,
+                     roots)
+    return np.real(np.poly(roots))
+
+
+def _jacobian(b, fp, v, yhat, nk):
+    """d yhat / d [b, f'] by filtering through 1 / F'."""
+    nb, m = b.size, fp.size - 1
+    segs = _segs(v)
+    cols = [_delays(_split(_filt([1.0], fp, segs), segs), nk, nb)]
+    if m:
+        cols.append(-_delays(_split(_filt([1.0], fp, _split(yhat, segs)),
+                                    segs), 1, m))
+    return np.hstack(cols)
+
+
+def _normal(jac, r):
+    """Column-scaled normal equations: J'J / dd', J'r / d and d = |J_:j|."""
+    d = np.linalg.norm(jac, axis=0)
+    d = np.maximum(d, 1e-12 * max(d.max(), 1e-300))
+    return (jac.T @ jac) / np.outer(d, d), (jac.T @ r) / d, d
+
+
+def _start(v, y, nb, m, nk, offsets=False):
+    """ARX start, stabilised, B refitted, improved by Steiglitz-McBride
+    (with `offsets`, a constant per experiment in every least-squares
+    fit and in the cost)."""
+    segs = _segs(y)
+    b, fp = _arx(v, y, nb, m, nk, offsets)
+    if not np.all(np.isfinite(fp)):
+        fp = np.concatenate([[1.0], np.zeros(m)])
+    fp = _stabilise(fp)
+    b = _b_given_f(v, y, fp, nb, nk, offsets)
+    yc = np.concatenate(segs)
+
+    def cost_of(b, fp):
+        return _cost(_centred(yc - _simulate(b, fp, v, nk), segs, offsets),
+                     0.0)
+
+    cost = cost_of(b, fp)
+    for _ in range(_SM_ITER if m else 0):
+        b_t, fp_t = _arx(_split(_filt([1.0], fp, v), _segs(v)),
+                         _split(_filt([1.0], fp, y), segs), nb, m, nk,
+                         offsets)
+        if not max_root(fp_t) < RADIUS:
+            break
+        cost_t = cost_of(b_t, fp_t)
+        if not cost_t < cost:
+            break
+        b, fp, cost = b_t, fp_t, cost_t
+    return b, fp
+
+
+def fit_oe(u, y, shape, integrators, *, max_iter=100, tol=1e-10,
+           offsets=False):
+    """Output-error fit on already scaled arrays (no checks, no scaling).
+
+    Parameters
+    ----------
+    u, y : ndarray, shape (N,), or lists of them
+        Input and output, of order one in size; lists are experiments,
+        each from zero initial conditions, with the cost summed.
+    shape : tuple of int
+        (nb, nf, nk): orders and delay.
+    integrators : int
+        Number of poles fixed at z = 1.
+    max_iter : int
+        Maximum Levenberg-Marquardt iterations.
+    tol : float
+        Stop when the relative (predicted or actual) decrease of the cost
+        falls below tol.
+    offsets : bool
+        Also fit a constant output offset per experiment. They enter
+        linearly, so they are projected out (variable projection): each
+        experiment's residual and Jacobian are centred.
+
+    Returns
+    -------
+    dict
+        ``B`` (nb,), ``F`` (nf + 1, monic, integrators included), ``Ff``
+        (the free factor F'), ``theta`` ([b, f'] free parameters),
+        ``std`` (their standard errors), ``cost``, ``yhat`` (offsets
+        included), ``offsets`` (one per experiment, zeros unless fitted),
+        ``nit``, ``converged`` and ``message``.
+    """
+    problem = _OutputError(u, y, shape, integrators, offsets)
+    return problem.result(problem.run(max_iter, tol))
+
+
+class _OutputError:
+    """The linear output-error cost of one `fit_oe` call and its
+    Levenberg-Marquardt run."""
+
+    def __init__(self, u, y, shape, integrators, offsets):
+        self.nb, nf, self.nk = shape
+        self.m = nf - integrators
+        self.integrators, self.offsets = integrators, offsets
+        v = _segs(u)
+        for _ in range(integrators):
+            v = [np.cumsum(part) for part in v]
+        self.v, self.ys = v, _segs(y)
+        self.y = np.concatenate(self.ys)
+
+    def centre(self, x):
+        return _centred(x, self.ys, self.offsets)
+
+    def cost_of(self, yhat):
+        return _cost(self.centre(self.y - yhat), 0.0)
+
+    def normal(self, b, fp, yhat):
+        return _normal(self.centre(_jacobian(b, fp, self.v, yhat, self.nk)),
+                       self.centre(self.y - yhat))
+
+    def run(self, max_iter, tol):
+        """Levenberg-Marquardt from the `_start`: a dict of the final
+        iterate, its normal equations and the verdict."""
+        nb = self.nb
+        b, fp = _start(self.v, self.ys, nb, self.m, self.nk, self.offsets)
+        s = dict(theta=np.concatenate([b, fp[1:]]), b=b, fp=fp)
+        s['yhat'] = _simulate(b, fp, self.v, self.nk)
+        s['cost'] = cost = self.cost_of(s['yhat'])
+        floor = 1e-24 * (0.5 * (self.y @ self.y))   # rounding: an exact fit
+        mu, nit, converged = 1e-4, 0, False
+        message = f"reached max_iter = {max_iter}"
+        for nit in range(max_iter + 1):
+            s['a'], g, s['d'] = self.normal(s['b'], s['fp'], s['yhat'])
+            gn = np.linalg.lstsq(s['a'], g, rcond=None)[0]
+            predicted = 0.5 * (g @ gn)   # decrease of the Gauss-Newton step
+            if cost <= floor or predicted <= tol * cost:
+                converged = True
+                message = (f"converged: predicted relative decrease "
+                           f"{predicted / max(cost, 1e-300):.1e} <= tol"
+                           if cost > floor else "converged: exact fit")
+                break
+            if nit == max_iter:
+                break
+            trial, mu = self._damped(s, g, gn, mu)
+            if trial is None:
+                converged = predicted <= np.sqrt(tol) * cost
+                message = (f"{'converged' if converged else 'stalled'}: no "
+                           f"decreasing step (predicted relative decrease "
+                           f"{predicted / cost:.1e})")
+                break
+            decrease = (cost - trial['cost']) / cost
+            s.update(trial)
+            cost = s['cost']
+            mu = mu / 10 if mu > 1e-10 else 0.0
+            if decrease <= tol:
+                nit += 1
+                s['a'], _, s['d'] = self.normal(s['b'], s['fp'], s['yhat'])
+                converged = True
+                message = (f"converged: relative decrease {decrease:.1e} "
+                           f"<= tol")
+                break
+        return dict(s, nit=nit, converged=converged, message=message)
+
+    def _damped(self, s, g, gn, mu):
+        """The step of the smallest damping from `mu` up (tenfold) that
+        keeps F' stable and lowers the cost: (the new iterate, mu), or
+        (None, mu) when mu passes 1e12."""
+        nb, theta, a, d = self.nb, s['theta'], s['a'], s['d']
+        while True:
+            try:
+                step = (gn if mu == 0 else
+                        np.linalg.solve(a + mu * np.eye(theta.size), g)) / d
+            except np.linalg.LinAlgError:
+                step = None
+            if step is not None:
+                trial = theta + step
+                fp_t = np.concatenate([[1.0], trial[nb:]])
+                if max_root(fp_t) < RADIUS:
+                    yhat_t = _simulate(trial[:nb], fp_t, self.v, self.nk)
+                    cost_t = self.cost_of(yhat_t)
+                    if cost_t < s['cost']:
+                        return dict(theta=trial, b=trial[:nb], fp=fp_t,
+                                    yhat=yhat_t, cost=cost_t), mu
+            mu = max(10 * mu, 1e-6)
+            if mu > 1e12:
+                return None, mu
+
+    def result(self, s):
+        """The `fit_oe` dict of the run `s`: a free pole pinned at the
+        stability boundary is not converged, standard errors, F with the
+        integrators, offsets."""
+        converged, message = s['converged'], s['message']
+        fp, yhat, cost = s['fp'], s['yhat'], s['cost']
+        radius = max_root(fp)
+        if converged and radius > _BOUNDARY:
+            converged = False
+            message = (f"pinned at the stability boundary: a free pole has "
+                       f"|p| = {radius:.7f}; the data suggest an integrator "
+                       f"(try integrators=1 or 'auto')")
+        dof = max(self.y.size - s['theta'].size
+                  - (len(self.ys) if self.offsets else 0), 1)
+        with np.errstate(all='ignore'):
+            cov = np.linalg.pinv(s['a']) / np.outer(s['d'], s['d'])
+            std = np.sqrt(2 * cost / dof * np.clip(np.diag(cov), 0, None))
+        f = fp.copy()
+        for _ in range(self.integrators):
+            f = np.convolve(f, [1.0, -1.0])
+        off = np.array([part.mean() for part in _split(self.y - yhat,
+                                                       self.ys)]) \
+            if self.offsets else np.zeros(len(self.ys))
+        yhat = yhat + _offsets_signal(self.ys, off)
+        return dict(B=s['b'].copy(), F=f, Ff=fp.copy(),
+                    theta=s['theta'].copy(), std=std, cost=cost, yhat=yhat,
+                    offsets=off, nit=s['nit'], converged=bool(converged),
+                    message=message)
+
+
+def wants_integrator(Ff):
+    """The rule of ``integrators='auto'``: try one integrator when the
+    free fit's denominator `Ff` has a real pole above 0.9."""
+    poles = np.roots(Ff) if np.size(Ff) > 1 else np.zeros(0)
+    return bool(np.any((poles.real > 0.9) & (np.abs(poles.imag) < 0.1)))
+
+
+def fit_oe_auto(us, ys, shape, integrators, *, max_iter=100, tol=1e-10,
+                offsets=False):
+    """`fit_oe` with ``integrators`` an int or 'auto' (scaled data).
+
+    'auto' fits 0 integrators, and 1 when `wants_integrator`, and keeps
+    the lower AIC. Returns (out, used, aic, text): the chosen fit, its
+    number of integrators, the AICs on the scaled data (None unless
+    'auto') and a sentence for the message.
+    """
+    kw = dict(max_iter=max_iter, tol=tol, offsets=offsets)
+    if integrators != 'auto':
+        return fit_oe(us, ys, shape, integrators, **kw), integrators, None, ''
+    nb, nf, _ = shape
+    n = sum(part.size for part in _segs(us))
+    out = fit_oe(us, ys, shape, 0, **kw)
+    p = nb + nf
+    aic = {0: float(n * np.log(max(out['cost'], 1e-300)) + 2 * p), 1: None}
+    if wants_integrator(out['Ff']):
+        out1 = fit_oe(us, ys, shape, 1, **kw)
+        aic[1] = float(n * np.log(max(out1['cost'], 1e-300)) + 2 * (p - 1))
+    used = int(aic[1] is not None and aic[1] <= aic[0])
+    if used:
+        out = out1
+    text = (f"; integrators='auto' chose {used} (AIC 0: {aic[0]:.6g}, 1: "
+            + ('skipped, no real pole > 0.9' if aic[1] is None
+               else f"{aic[1]:.6g}") + ")")
+    return out, used, aic, text

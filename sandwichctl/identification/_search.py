@@ -1,0 +1,512 @@
+"""The output-error search of ``identify(method='oe')``, step by step
+(private).
+
+Each numbered step of docs/algorithm.md (``method="oe"``) is one function
+or method here, in that order and with that number:
+
+- `step1_units` to `step3_integrators`: the scaled data, the linear
+  baseline and the integrators, once per identification (`search` runs
+  them);
+- `Search.step4_nested_starts` to `Search.step12_never_worse_than_linear`:
+  the search of one integrator count from its linear fit.
+
+The starts come from `_starts`, the solver is `_lm.lm`, the problem and
+its verdict from `_problem`. A new start is one function in `_starts` and
+one line in the step that uses it; the progress bar counts what the steps
+say they will run (`Search.planned`).
+"""
+
+import numpy as np
+
+from ._lm import lm
+from ._linear import fit_oe, fit_output, wants_integrator
+from ._predictor import oe_signals
+from ._problem import Problem
+from ._smooth import smooth_refine
+from ._starts import (splits, opened, random_start, recursive_start,
+                      relocations, perturb)
+from .linear import oe_transfer_function
+from .._checks import progress_bar
+
+__all__ = []
+
+#: A hop is refined to convergence only if a short run (screen_iter
+#: iterations) already brings it within this share of the best cost.
+HOP_SLACK = 0.1
+#: Relative size of a hop's perturbation (at least 0.05 absolute).
+HOP_SPREAD = 0.1
+#: Relocated starts refined to convergence per round.
+RELOCATE_KEEP = 2
+#: Iterations of the L2 re-fit of a relocated start (a start only).
+RELOCATE_REFIT_ITER = 20
+#: Where the integrator of a model goes when it restarts a fit without one.
+UNINTEGRATED_POLE = 0.99
+
+
+def search(task):
+    """Steps 1 to 12 on `task` (a `Task`): the problem, the best `lm`
+    output and the linear baseline of the chosen integrator count."""
+    scaled = step1_units(task)
+    linears = step2_linear_baseline(task, scaled)
+    return step3_integrators(task, linears)
+
+
+class Task:
+    """What every problem of one identification shares: the data (lists of
+    experiments), orders, options (`OEOptions`), and the model's dt and
+    name, progress bar and estimated offsets and initial conditions."""
+
+    def __init__(self, u, y, orders, opt, **kw):
+        self.u, self.y, self.orders, self.opt = u, y, orders, opt
+        self.dt, self.name = kw.get('dt', True), kw.get('name')
+        self.progress = kw.get('progress', False)
+        self.offsets = kw.get('offsets', False)
+        self.inits = opt.initial_state == 'estimate'
+        o = orders
+        self.shape = (o['nb'] + o['nd'] + 1, o['na'] + o['nc'],
+                      o['q1'] + o['q2'])
+
+    def problem(self, k, sign):
+        """The scaled problem with k integrators and gain sign `sign`."""
+        i1, i2 = integrator_split(k, self.orders, self.opt.integrator_block)
+        return Problem(self.u, self.y, self.orders, i1=i1, i2=i2, sign=sign,
+                       dt=self.dt, name=self.name, offsets=self.offsets,
+                       inits=self.inits)
+
+    def fit_linear(self, scaled, k):
+        """The linear output-error fit with k integrators on `scaled`."""
+        return fit_oe(scaled.u, scaled.y, self.shape, k,
+                      max_iter=self.opt.max_iter, tol=self.opt.tol,
+                      offsets=self.offsets)
+
+
+def integrator_split(k, orders, block):
+    """(i1, i2): k integrators in `block` ('L1' or 'L2') first, the rest
+    in the other block."""
+    na, nc = orders['na'], orders['nc']
+    first, second = (na, nc) if block == 'L1' else (nc, na)
+    if k > na + nc:
+        raise ValueError(f"integrators = {k} exceed the na + nc = "
+                         f"{na + nc} poles of the structure")
+    i_first = min(k, first)
+    i_second = k - i_first
+    return (i_first, i_second) if block == 'L1' else (i_second, i_first)
+
+
+def step1_units(task):
+    """Step 1: u and y scaled (and rounded), the sign taken out."""
+    return Problem(task.u, task.y, task.orders, dt=task.dt, name=task.name)
+
+
+def step2_linear_baseline(task, scaled):
+    """Step 2: the linear output-error fits, {integrators: fit}: the
+    declared count, or for 'auto' none and, when `wants_integrator`, one
+    (step 3 chooses)."""
+    k = task.opt.integrators
+    nf = task.shape[1]
+    if k != 'auto' and k > nf:
+        raise ValueError(f"integrators = {k} exceed the na + nc = {nf} "
+                         f"poles of the structure")
+    if k != 'auto':
+        return {k: task.fit_linear(scaled, k)}
+    linears = {0: task.fit_linear(scaled, 0)}
+    if wants_integrator(linears[0]['Ff']):
+        linears[1] = task.fit_linear(scaled, 1)
+    return linears
+
+
+def step3_integrators(task, linears):
+    """Step 3: the search (steps 4 to 12) from each linear fit; without an
+    integrator restarted from the fit with one if that ended cheaper; the
+    lower AIC."""
+    fits = {k: Search(task, lin, k).run() for k, lin in linears.items()}
+    if len(fits) > 1 and fits[1][1]['cost'] < fits[0][1]['cost']:
+        # the fit without an integrator nests the one with (a pole just
+        # inside z = 1): when it ended worse, it stopped in a poorer
+        # basin, so it restarts from the other one's model
+        fits[0] = _unintegrated(task, fits[0], fits[1])
+    n = sum(part.size for part in task.u)
+
+    def aic(k):
+        prob, out, _ = fits[k]
+        return n * np.log(max(out["cost"], 1e-300)) + 2 * prob.st.size
+
+    k = min(fits, key=aic)
+    prob, best, linear = fits[k]
+    if len(fits) > 1:
+        linear['message'] += (
+            f"; integrators='auto' chose {k} by AIC of the sandwich fits ("
+            + ', '.join(f"{j}: {aic(j):.6g}" for j in sorted(fits)) + ")")
+    return prob, best, linear
+
+
+def _unintegrated(task, free, integrating):
+    """The fit without an integrator, `free` = (problem, best, linear),
+    restarted from the fit with one: its pole at z = 1 moved to
+    `UNINTEGRATED_POLE`, refined and polished (steps 8 to 10); the
+    cheaper of that and `free`."""
+    prob1, best1, _ = integrating
+    prob0, best0, linear0 = free
+    sign = best1['sign']
+    if prob0.sign != sign:
+        prob0 = task.problem(0, sign)
+    st0, st1 = prob0.st, prob1.st
+    theta = st1.theta(best1['phi'])
+    nc, na = task.orders['nc'], task.orders['na']
+    lo, n = (nc, na) if st1.i1 else (0, nc)
+    roots = np.roots(np.r_[1.0, theta[lo:lo + n]])
+    roots[np.argmin(np.abs(roots - 1.0))] = UNINTEGRATED_POLE
+    theta[lo:lo + n] = np.real(np.poly(roots))[1:]
+    phi = st0.phi(theta)
+    phi[st0.q:] = best1['phi'][st1.q:]       # offsets, initial conditions
+    if not st0.stable(phi):
+        return free
+    restart = Search(task, None, 0, probs={sign: prob0})
+    out = restart.polish(restart.converge(sign, phi))
+    if not out['cost'] < best0['cost']:
+        return free
+    out['n_starts'] = best0['n_starts'] + 1
+    return prob0, out, linear0
+
+
+def _head(parts, n):
+    """The leading samples of the experiments, about n in all (each
+    experiment in proportion to its length, at least 50 samples)."""
+    total = sum(part.size for part in parts)
+    if total <= n:
+        return parts
+    return [part[:max(50, int(np.ceil(n * part.size / total)))]
+            for part in parts]
+
+
+class Search:
+    """The search of one integrator count k from the linear fit `lin`
+    (steps 4 to 12); `run` runs them. ``probs`` maps a gain sign to its
+    scaled `Problem`, ``heads`` to (parametrisation, u, y) of its leading
+    `screen_samples` samples, on which the screening runs."""
+
+    def __init__(self, task, lin, k, probs=None):
+        self.task, self.opt, self.lin, self.k = task, task.opt, lin, k
+        if probs is None:
+            self.sign = -1 if lin['B'][0] < 0 else 1
+            probs = {self.sign: task.problem(k, self.sign)}
+        self.probs = probs
+        self.heads = {}
+        self._head_all()
+        self.bar = None
+        self.tick = lambda: None
+
+    def _head_all(self):
+        n = self.opt.screen_samples
+        self.heads = {s: (p.st, _head(p.u, n), _head(p.y, n))
+                      for s, p in self.probs.items()}
+
+    def run(self):
+        """Steps 4 to 12: (problem, best `lm` output, linear baseline)."""
+        linear = self.baseline()
+        groups = self.step4_nested_starts()
+        self.bar = progress_bar(self.task.progress, total=self.planned(
+            groups), desc='identify: starts', leave=False)
+        self.tick = self.bar.update
+        cands = [c for g in groups for c in g]
+        screened = self.screen(cands, self.opt.screen_iter // 2)
+        others = self.step5_other_basins(groups, screened)
+        best, finals = self.step6_screen_and_converge(screened, others)
+        polished = self.polish(best)               # steps 8 to 10
+        best = self.step11_degenerate_best(polished, best, finals)
+        self.bar.close()
+        best = self.step12_never_worse_than_linear(best)
+        best['n_starts'] = len(cands) + len(others)
+        return self.probs[best['sign']], best, linear
+
+    def planned(self, groups):
+        """Progress-bar total: what steps 4 to 10 say they will run."""
+        opt = self.opt
+        return (sum(len(g) for g in groups) + len(groups) + opt.sp_starts
+                + opt.n_random + 1 + opt.keep + opt.relocate + 1 + opt.hops)
+
+    def baseline(self):
+        """The linear fit in the user's units (``res.linear``)."""
+        lin, prob, k = self.lin, self.probs[self.sign], self.k
+        nb_l, nf_l, nk_l = self.task.shape
+        y_all = np.concatenate(self.task.y)
+        r_lin = y_all - prob.sy * fit_output(
+            lin, [part / prob.su for part in prob.u_user], nk_l)
+        denom = np.linalg.norm(y_all - y_all.mean())
+        return {
+            'fit': float(100 * (1 - np.linalg.norm(r_lin) / denom)),
+            'cost': 0.5 * float(r_lin @ r_lin), 'cost_scaled': lin['cost'],
+            'n_params': nb_l + nf_l - k, 'integrators': k,
+            'model': oe_transfer_function(lin['B'] * prob.sy / prob.su,
+                                          lin['F'], nk_l, self.task.dt),
+            'converged': lin['converged'], 'message': lin['message']}
+
+    def extend(self, s, phi):
+        """A model start of sign s with the linear fit's output offsets
+        (and zero initial conditions)."""
+        st = self.probs[s].st
+        phi = st.extend(phi)
+        phi[st.q:st.q + st.n_off] = s * self.lin['offsets'][:st.n_off]
+        return phi
+
+    def step4_nested_starts(self):
+        """Step 4: the linear fit's splits, closed and opened: a list of
+        groups [(sign, phi) closed, then opened to each width]; with many
+        splits, those whose widest opening fits best."""
+        sign, B, F = self.sign, self.lin['B'], self.lin['F']
+        starts = [(sign, self.extend(sign, phi))
+                  for phi in splits(self.probs[sign].st, sign * B, F)]
+        if abs(B[0]) < 0.2 * np.max(np.abs(B)):
+            # the sign of a small leading coefficient is uncertain: also
+            # the other sign, from the linear fit with it flipped
+            self.probs[-sign] = self.task.problem(self.k, -sign)
+            self._head_all()
+            flipped = B.copy()
+            flipped[0] = -B[0]
+            starts += [(-sign, self.extend(-sign, phi)) for phi in
+                       splits(self.probs[-sign].st, -sign * flipped, F)]
+        if not starts:
+            o = self.task.orders
+            raise ValueError(
+                f"the linear fit of the total orders cannot be split into "
+                f"L1 (na = {o['na']}, nb = {o['nb']}) and L2 (nc = "
+                f"{o['nc']}, nd = {o['nd']})")
+        groups = [[(s, phi)] + [(s, w) for w in opened(
+            self.probs[s].st, phi, self.probs[s].u, self.opt.widths)]
+            for s, phi in starts]
+        if len(groups) > self.opt.max_splits:
+            groups = sorted(groups, key=self._widest_cost)
+            groups = groups[:self.opt.max_splits]
+        return groups
+
+    def _widest_cost(self, group):
+        s, phi = group[-1]
+        st, u, y = self.heads[s]
+        return st.cost(phi, u, y)
+
+    def step5_other_basins(self, groups, screened):
+        """Step 5: series-parallel runs from every split opened widest,
+        from the best screened starts and from random structures, and the
+        recursive estimator's start: [(sign, phi)]."""
+        opt, sign, others = self.opt, self.sign, []
+        if opt.sp_iter:
+            rng = np.random.default_rng(opt.seed)
+            prob = self.probs[sign]
+            seeds = [g[-1] for g in groups] + [
+                (out['sign'], out['phi']) for out in screened[:opt.sp_starts]]
+            seeds += [(sign, random_start(prob.st, prob.u, rng))
+                      for _ in range(opt.n_random)]
+            for s, phi in seeds:
+                st, us, ys = self.heads[s]
+                out = lm(st, phi, us, ys, opt.sp_iter, sp=True)
+                if st.stable(out['phi']):
+                    others.append((s, out['phi']))
+                self.tick()
+        if not (self.k or self.task.orders['na'] == 0):
+            others += recursive_start(self.probs[sign], self.task.orders)
+        self.tick()
+        return others
+
+    def screen(self, cands, iterations, tick=True):
+        """A few LM iterations from each (sign, phi) on the leading
+        samples; sorted by cost."""
+        out = []
+        for s, phi in cands:
+            st, u, y = self.heads[s]
+            res = lm(st, phi, u, y, iterations, self.opt.tol)
+            res['sign'] = s
+            out.append(res)
+            if tick:
+                self.tick()
+        return sorted(out, key=lambda res: res['cost'])
+
+    def converge(self, s, phi):
+        """`lm` to convergence on all the data from phi (sign s)."""
+        p = self.probs[s]
+        return dict(lm(p.st, phi, p.u, p.y, self.opt.max_iter,
+                       self.opt.tol), sign=s)
+
+    def step6_screen_and_converge(self, screened, others):
+        """Step 6: the starts of step 5 screened with the best of step 4;
+        the best `keep` to convergence, each with step 7. Returns (the
+        best, every converged start)."""
+        keep = self.opt.keep
+        screened = sorted(screened[:keep] + self.screen(
+            others, self.opt.screen_iter, tick=False),
+            key=lambda out: out['cost'])
+        best, finals = None, []
+        for out in screened[:keep]:
+            out = self.step7_refit_l2(self.converge(out['sign'], out['phi']))
+            finals.append(out)
+            if best is None or out['cost'] < best['cost']:
+                best = out
+            self.tick()
+        return best, finals
+
+    def step7_refit_l2(self, out):
+        """Step 7: L2 re-fitted to the model's own backlash output and the
+        sandwich refined again, while that lowers the cost."""
+        p = self.probs[out['sign']]
+        for _ in range(self.opt.refits):
+            phi = refit_l2(p.st, out['phi'], p.u, p.y, self.opt.max_iter,
+                           self.opt.tol)
+            if phi is None or not (p.st.cost(phi, p.u, p.y)
+                                   < out['cost'] * (1 - 1e-6)):
+                break                   # L2 is already the best for its v
+            # lm never raises the cost, so this refinement is an improvement
+            out = self.converge(out['sign'], phi)
+        return out
+
+    def polish(self, best):
+        """Steps 8 to 10 from `best`; each keeps only what lowers the
+        cost."""
+        best = self.step8_smoothed_path(best)
+        for _ in range(self.opt.relocate):
+            moved = self.step9_relocations(best)
+            self.tick()
+            if moved is best:
+                break
+            best = moved
+        return self.step10_hops(best)
+
+    def step8_smoothed_path(self, best):
+        """Step 8: a path of smoothed costs from the best (continuous
+        where the exact cost jumps), then the exact cost again."""
+        if self.opt.smooth:
+            p = self.probs[best['sign']]
+            out = smooth_refine(p.st, best['phi'], p.u, p.y,
+                                self.opt.max_iter, self.opt.tol)
+            if out is not None and out['cost'] < best['cost']:
+                best = dict(out, sign=best['sign'])
+        self.tick()
+        return best
+
+    def step9_relocations(self, best):
+        """Step 9, one round: every relocated start (`_starts.relocations`)
+        gets L2 re-fitted and a short run on the leading samples; the best
+        `RELOCATE_KEEP` converge. The best of them if it lowers the cost,
+        else `best` itself."""
+        st, us, ys = self.heads[best['sign']]
+        opt, starts = self.opt, []
+        for phi in relocations(st, best['phi'], us):
+            refit = refit_l2(st, phi, us, ys, RELOCATE_REFIT_ITER, opt.tol)
+            phi = phi if refit is None else refit
+            if st.stable(phi):
+                starts.append(phi)
+        short = sorted((lm(st, phi, us, ys, opt.screen_iter // 2, opt.tol)
+                        for phi in starts), key=lambda out: out['cost'])
+        found = best
+        for out in short[:RELOCATE_KEEP]:
+            out = self.converge(best['sign'], out['phi'])
+            if out['cost'] < found['cost'] * (1 - 1e-6):
+                found = out
+        return found
+
+    def step10_hops(self, best):
+        """Step 10: `hops` perturbed restarts from the best so far, each
+        refined to convergence if a short run looks promising
+        (`HOP_SLACK`); the better is kept."""
+        rng = np.random.default_rng(self.opt.seed + 1)
+        for _ in range(self.opt.hops):
+            best = self._hop(best, rng)
+            self.tick()
+        return best
+
+    def _hop(self, best, rng):
+        prob = self.probs[best['sign']]
+        phi = perturb(prob.st, best['phi'], rng, HOP_SPREAD)
+        if phi is None:
+            return best
+        out = lm(prob.st, phi, prob.u, prob.y, self.opt.screen_iter,
+                 self.opt.tol)
+        if not out['cost'] < best['cost'] * (1 + HOP_SLACK):
+            return best               # on its way back up the same valley
+        out = self.converge(best['sign'], out['phi'])
+        return out if out['cost'] < best['cost'] else best
+
+    def step11_degenerate_best(self, best, converged, finals):
+        """Step 11: if the best (polished from the `converged` start of
+        step 6) has a zero on the search bound, the cheapest other start of
+        `finals` without one is polished as well; the cheaper."""
+        def at_bound(out):
+            return self.probs[out['sign']].st.zeros_at_bound(out['phi'])
+
+        if not at_bound(best):
+            return best
+        rest = [out for out in finals if out is not converged and
+                not at_bound(out)]
+        if not rest:
+            return best
+        self.tick = lambda: None              # not counted in the bar
+        other = self.polish(min(rest, key=lambda out: out['cost']))
+        return other if other['cost'] < best['cost'] else best
+
+    def step12_never_worse_than_linear(self, best):
+        """Step 12: if no start ends below the linear fit, the model is the
+        linear fit itself, as a sandwich with a closed backlash (the zero
+        radius lifted to hold its zeros)."""
+        if best['cost'] <= self.lin['cost'] and np.isfinite(best['cost']):
+            return best
+        prob = self.probs[self.sign]
+        st = prob.st
+        st.zero_radius = np.inf
+        phi = self.extend(self.sign, splits(st, self.sign * self.lin['B'],
+                                            self.lin['F'])[0])
+        out = lm(st, phi, prob.u, prob.y, max_iter=1)
+        out['sign'] = self.sign
+        out['fallback'] = True
+        out['message'] = ("no sandwich start improved on the linear fit: "
+                          "the model is the linear fit with a closed "
+                          "backlash")
+        return out
+
+
+def refit_l2(st, phi, u, y, max_iter=100, tol=1e-10):
+    """A start with L2 re-fitted to the model's own intermediate signal
+    (steps 7 and 9).
+
+    With L1 and the backlash held, y is a linear output-error model of
+    the backlash output v; the linear OE fit (ARX, Steiglitz-McBride,
+    Levenberg-Marquardt) finds its optimum far more reliably than the
+    joint descent, which can stall with L2's zeros or poles in the wrong
+    place. Its gain moves into the backlash slopes (d0 = 1 stays). The
+    linear fit starts from rest; estimated initial conditions (if the
+    parametrisation has them) are kept, their past v scaled with the
+    slopes.
+
+    Returns
+    -------
+    ndarray or None
+        The new phi, or None when the fit gives no admissible start (v
+        constant, a leading coefficient of the wrong sign, a denominator
+        not strictly stable or a zero beyond the zero radius, a value not
+        finite).
+    """
+    theta = st.theta(phi)
+    vs = [oe_signals(theta, st.o, uu, st.init(phi, e))[2]
+          for e, uu in enumerate(u)]
+    with np.errstate(all='ignore'):
+        sv = float(np.std(np.concatenate(vs)))
+    if not (np.isfinite(sv) and sv > 0):
+        return None
+    na, nb, nc, nd = st.o[:4]
+    fit = fit_oe([v / sv for v in vs], list(y), (nd + 1, nc, st.o[5]),
+                 st.i2, max_iter=max_iter, tol=tol, offsets=bool(st.n_off))
+    B, F = fit['B'], fit['F']
+    if not (np.all(np.isfinite(B)) and np.all(np.isfinite(F))
+            and B[0] > 1e-9 * np.max(np.abs(B))):
+        return None
+    new = theta.copy()
+    new[:nc] = F[1:]
+    im = nc + na
+    new[im:im + 2] *= B[0] / sv
+    new[im + 4 + nb:] = B[1:] / B[0]
+    out = st.phi(new)
+    out[st.q:] = phi[st.q:]
+    if st.n_off:
+        out[st.q:st.q + st.n_off] = fit['offsets'][:st.n_off]
+    kx, kv = st.init_sizes[:2]
+    for e in range(st.n_inits):           # past v scales with the slopes
+        at = st.q + st.n_off + e * st.n_init + kx
+        out[at:at + kv] *= B[0] / sv
+    return out if st.stable(out) else None
