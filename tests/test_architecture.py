@@ -155,9 +155,6 @@ TESTS = PACKAGE.parent / 'tests'
 #: Test files that check the whole package rather than one module.
 CROSS_CUTTING = {'architecture', 'bad_input', 'docs', 'notebooks', 'pickle',
                  'readme', 'warnings'}
-#: Test files of the design room, renamed with its rewrite (issue 22,
-#: item 6); nothing else may be listed here.
-DESIGN_PENDING = {'compensate'}
 
 
 def _module_files():
@@ -183,7 +180,7 @@ def test_test_files_are_named_after_modules():
     stray = []
     for path in sorted(TESTS.glob('test_*.py')):
         name = path.stem[len('test_'):]
-        if name in CROSS_CUTTING | DESIGN_PENDING:
+        if name in CROSS_CUTTING:
             continue
         if not any(name == m or name.startswith(m + '_') for m in names):
             stray.append(path.name)
