@@ -231,7 +231,11 @@ def test_a_zero_on_the_search_bound_is_not_a_success():
         far[st.im + 4] = -radius            # L1: 1 - r q^-1, zero at r
         out = lm(st, far, prob.u, prob.y, max_iter=0)
         out['converged'] = True
-        verdicts[radius] = prob.result(out, 'oe')
+        with warnings.catch_warnings():
+            # the degenerate optimum is poorly determined too; this test
+            # is about the verdict, not that warning
+            warnings.simplefilter('ignore', sw.IdentificationWarning)
+            verdicts[radius] = prob.result(out, 'oe')
     at_bound, inside = verdicts.values()
     assert not at_bound.success
     assert 'zero of L1 ended on the search bound' in at_bound.message

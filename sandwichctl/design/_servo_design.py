@@ -151,6 +151,10 @@ def bandwidth(num, den, w):
     return float(w[below[0]]) if below.size else float(w[-1])
 
 
+#: the loop gain must be below 1 above this multiple of the plant's
+#: bandwidth (its -3 dB frequency, an integrator set aside)
+CROSSOVER_LIMIT = 1.0
+
 #: most the derivative may add to the controller's gain at the Nyquist
 #: frequency, relative to kp (sensor quantisation is amplified by it)
 DERIVATIVE_BOOST = 3.0
@@ -181,7 +185,7 @@ def design_pid(num, den, dt, modulus_margin):
     num = sign * num
     P = np.polyval(num, z) / np.polyval(den, z)
     wb = bandwidth(num, den, w)
-    high = w > wb
+    high = w > CROSSOVER_LIMIT * wb
     # scale of the gains: 1/|P| at the plant's bandwidth and where its
     # phase first reaches -180 deg, whichever is smaller
     phase = np.unwrap(np.angle(P))

@@ -3,14 +3,24 @@ r"""A servo controller designed from a model, that runs against any plant.
 `servo_controller` turns an identified (or known) model into a
 `ServoController`: a PID feedback designed for the model's linear part,
 and a feedforward that inverts the model along the reference, using a few
-samples of reference preview. For a `SandwichSystem` the feedforward runs
-the reference through :math:`L_2^{-1}`, the backlash inverse and
-:math:`L_1^{-1}`, so the drive crosses the play *when the reference
-reverses*, before an error has built up; for a linear model it is the
-linear inverse alone. The controller steps one sample at a time
-(``u = ctrl.step(r_ahead, y)``), so it runs against a simulation, a
-hardware-in-the-loop rig or the physically simulated drive of
-``sandwichctl.data.ServoDrive``.
+samples of reference preview. For a `SandwichSystem` the feedforward also
+runs the reference through a backlash inverse, so the drive crosses the
+play *when the reference reverses*, before an error has built up. The
+controller steps one sample at a time (``u = ctrl.step(r_ahead, y)``), so
+it runs against a simulation, a hardware-in-the-loop rig or the
+physically simulated drive of ``sandwichctl.data.ServoDrive``.
+
+Which linear model
+------------------
+A known model (a `SandwichSystem` given directly) is inverted exactly:
+:math:`L_1^{-1} B^{-1} L_2^{-1}` along the reference, and the PID is
+designed on :math:`\bar m L_1 L_2`. For an identification result, the PID
+is designed on its linear baseline fit (the loop in the holds is then the
+linear design's), and the feedforward inverts the sandwich's own
+:math:`\bar m L_1 L_2` when it is the clearly better model (see
+``feedforward_from``), else the baseline; the band offset of the inverse
+reaches the plant through the DC gains of L1 and L2 (their fitted fast
+dynamics, inverted, would turn the offset's jump into ringing).
 
 Why the backlash inverse sits in the feedforward
 ------------------------------------------------
@@ -264,7 +274,10 @@ def _feedforward_source(choice, result, lin_model, integrating, zeros):
         return True, "linear part designed on the model's mbar L1 L2"
     gap = result.fit - result.linear['fit']
     if choice == 'auto':
-        outside = np.abs(zeros) >= 1
+        # zeros outside the unit circle that the preview inverse cannot
+        # just keep by their DC gain (sampling zeros on the negative real
+        # axis it can)
+        outside = (np.abs(zeros) >= 1) & (np.real(zeros) >= sd.RINGING)
         use = not integrating and gap >= MODEL_FF_GAP and not outside.any()
         why = (f"the sandwich fits {gap:.1f} points better than the "
                f"baseline (" + ("at least " if gap >= MODEL_FF_GAP
@@ -362,10 +375,15 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         Most samples of preview one unstable zero may use (default 20).
     band_fraction : float, optional
         Share of the model's band that the feedforward's backlash inverse
-        compensates, in [0, 1] (default 0.25, and 0.1 when L1 integrates:
-        the play a loop sees is smaller than the mechanical gap, since the
-        load coasts into it; larger shares over-compensated on the drives
-        of ``benchmarks/bench_servo.py``).
+        compensates, in [0, 1]. By default 0.5 when the feedforward
+        inverts the sandwich's own linear part, 0.25 when it inverts the
+        linear baseline (which already carries part of the play), 0.1 when
+        L1 integrates: the play a loop sees is smaller than the mechanical
+        gap, since the load coasts into it, and larger shares
+        over-compensated on the tuning drives of
+        ``benchmarks/bench_servo.py``. A default compensation that makes
+        the loop around the identified model itself 1.25 times worse is
+        turned off, and the notes say so.
     smoothing : float, optional
         Smoothing width of the inverse in the model's v (default 2 % of
         the compensated band).
@@ -378,7 +396,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         sandwich (whose linear baseline the feedback is always designed
         on): the sandwich's :math:`\bar m L_1 L_2` ('model'), the
         baseline, or by default the sandwich's when L1 does not integrate,
-        L1 L2 is minimum-phase and the sandwich fits at least 2 points
+        L1 L2 has no zero outside the unit circle (sampling zeros with a
+        real part below -0.5 aside) and the sandwich fits at least 2 points
         better than the baseline (the play then distorts the baseline's
         dynamics), with half the band compensated.
     feedback_scale : float, optional
