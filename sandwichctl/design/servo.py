@@ -579,7 +579,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     if comp and result is not None and band_by_default and \
             band_fraction > 0 and not _helps_on_model(ctrl, model):
         # the compensation must at least help on the model it came from
-        ctrl._p[ix_scalar(ctrl) + 2:ix_scalar(ctrl) + 4] = 0.0
+        ctrl._p[_scalar_index(ctrl) + 2:_scalar_index(ctrl) + 4] = 0.0
         ctrl.band_fraction = 0.0
         ctrl._design['band_fraction'] = 0.0
         ctrl._design['_scalars'][2:4] = 0.0
@@ -589,7 +589,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     return ctrl
 
 
-def ix_scalar(ctrl):
+def _scalar_index(ctrl):
     """Where the scalars start in ctrl._p."""
     return int(ctrl._ix[9])
 
@@ -615,7 +615,7 @@ def _helps_on_model(ctrl, model):
     errors = []
     for scale in (1.0, 0.0):
         trial = pickle.loads(pickle.dumps(ctrl))
-        trial._p[ix_scalar(trial) + 2:ix_scalar(trial) + 4] *= scale
+        trial._p[_scalar_index(trial) + 2:_scalar_index(trial) + 4] *= scale
         with np.errstate(all='ignore'), warnings.catch_warnings():
             warnings.simplefilter('ignore')
             y = servo_loop(model, r, trial)[0]
