@@ -24,7 +24,8 @@ ticks at the motor's torque limit. With ``--sweep`` it also scales the
 linear feedback on the play-free drive to find the best linear design of
 the sweep.
 
-Run: python benchmarks/bench_servo.py [--seeds 2] [--random 6] [--sweep]
+Run: python benchmarks/bench_servo.py [--seeds 2] [--random 8] [--sweep]
+     [--seed0 2 --random0 8] [--feedforward zpetc]
 """
 
 import argparse
@@ -98,6 +99,10 @@ def main():
     ap.add_argument('--random', type=int, default=6)
     ap.add_argument('--sweep', action='store_true')
     ap.add_argument('--loops', default='position,speed')
+    ap.add_argument('--feedforward', default='preview',
+                    choices=['preview', 'zpetc'],
+                    help='how both designs invert zeros outside the unit '
+                    'circle')
     args = ap.parse_args()
     rows, checks = [], []
     start = time.perf_counter()
@@ -107,8 +112,8 @@ def main():
         res, lin = identify(loop, play, dt, params, seed)
         r = sw.servo_reference(dt, 1e-3)
         try:
-            c_lin = sw.servo_controller(lin)
-            c_sw = sw.servo_controller(res)
+            c_lin = sw.servo_controller(lin, feedforward=args.feedforward)
+            c_sw = sw.servo_controller(res, feedforward=args.feedforward)
         except ValueError as exc:
             print(f"{label} play {play * 1e6:.0f}: design refused: {exc}")
             continue
