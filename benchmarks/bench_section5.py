@@ -92,9 +92,10 @@ def main():
     print_table(['case', 'method', 'err@2k', 'err@5k', 'err@10k', 'err@20k',
                  'worst@20k', 'reach 5%', 'median settle', 'us/sample',
                  'finite', 'failed*'], rows)
-    print("\n* runs whose result has success=False: diverged (inf), or a "
+    print("\n* runs whose result has success=False: diverged (inf), a "
           "final model with a pole of L1 or L2 on or outside the unit "
-          "circle")
+          "circle, or a fit on the record below the linear output-error "
+          "baseline's")
 
 
 if __name__ == '__main__':

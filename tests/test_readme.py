@@ -18,6 +18,10 @@ def test_readme_example_runs(tmp_path, monkeypatch):
     res, plant = namespace['res'], namespace['plant']
     assert res.success
     assert sw.parameter_error(res.theta, plant.theta) < 0.02
+    paper = namespace['paper']        # as its comment says: below linear
+    assert (round(paper.fit, 1), round(paper.linear['fit'], 1)) == (61.4,
+                                                                     63.6)
+    assert not paper.success
     loaded = sw.load_model(tmp_path / 'stage_axis.json')
     np.testing.assert_array_equal(loaded.theta, res.model.theta)
 

@@ -221,8 +221,11 @@ def test_gradient_baseline_runs_and_reduces_error():
     plant, u, y = _paper_data(8000, seed=12)
     res = sw.identify(u, y, **plant.orders, method='gradient')
     err = res.parameter_error(plant.theta)
-    assert res.success and res.counts['skip'] > 0
+    assert res.counts['skip'] > 0 and 'diverged' not in res.message
     assert err[-1] < 0.9 * err[0]
+    # slow as the paper says: after 8,000 samples it is still below the
+    # linear baseline, and the verdict says so
+    assert res.fit < res.linear['fit'] and not res.success
 
 
 def test_streaming_equals_identify():

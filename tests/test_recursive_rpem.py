@@ -36,8 +36,8 @@ def test_rpem_recovers_from_divergence_instead_of_blowing_up():
     res = sw.identify(u, y, **plant.orders, method='rpem', theta0=theta0,
                       P0=1e4, p_max=1e5, err_limit=2 * np.std(y),
                       warmup=3000)
-    assert res.success and np.all(np.isfinite(res.history))
-    assert res.counts['reset'] > 0
+    assert 'diverged' not in res.message
+    assert np.all(np.isfinite(res.history)) and res.counts['reset'] > 0
     # after the resets the estimator still reduces the prediction error
     e = res.errors
     assert np.mean(e[-500:] ** 2) < 0.2 * np.mean(e[:500] ** 2)

@@ -314,6 +314,16 @@ class Problem:
         theta = model.normalized().theta / self.unit
         return self.st.phi(theta)
 
+    def evaluate(self, model):
+        """A model of this structure on these data: (its output-error cost
+        on the scaled data, in the units of `lm`'s cost and of the linear
+        baseline's ``cost_scaled``; its cost and its fit in the user's
+        units). Not finite for a model that diverges on them."""
+        with np.errstate(all='ignore'):
+            phi = self.phi_of_model(model)
+            _, cost, fit = self._fit(phi)
+            return self.st.cost(phi, self.u, self.y), cost, float(fit)
+
     def model(self, phi):
         """The model of phi in the user's units (signed normalisation)."""
         return SandwichSystem.from_theta(

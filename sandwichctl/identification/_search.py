@@ -6,7 +6,8 @@ or method here, in that order and with that number:
 
 - `step1_units` to `step3_integrators`: the scaled data, the linear
   baseline and the integrators, once per identification (`search` runs
-  them);
+  them; `linear_baseline` runs steps 1 and 2 alone, the baseline the
+  recursive methods are judged against);
 - `Search.step4_nested_starts` to `Search.step12_never_worse_than_linear`:
   the search of one integrator count from its linear fit.
 
@@ -113,6 +114,15 @@ def step2_linear_baseline(task, scaled):
     if wants_integrator(linears[0]['Ff']):
         linears[1] = task.fit_linear(scaled, 1)
     return linears
+
+
+def linear_baseline(task):
+    """Steps 1 and 2 alone, for the methods that do not search (the
+    recursive ones): the linear baseline of the declared integrator count
+    (``task.opt.integrators``, a number) in the user's units, the
+    ``res.linear`` of `Search.baseline`."""
+    (k, lin), = step2_linear_baseline(task, step1_units(task)).items()
+    return Search(task, lin, k).baseline()
 
 
 def step3_integrators(task, linears):

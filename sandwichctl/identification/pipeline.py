@@ -26,7 +26,10 @@ The search lives in `_search`, one function or method per step of
 ``docs/algorithm.md``; the options of each method in `_options`. The
 paper's recursive methods (``'bundle'``, ``'gradient'``) and the recursive
 prediction-error estimator (``'rpem'``) run here, through
-`RecursiveIdentifier`, optionally followed by `refine`.
+`RecursiveIdentifier`, optionally followed by `refine`. Their models are
+judged by the same `verdict`, against the same linear baseline (steps 1
+and 2 alone, ``_search.linear_baseline``): one that fits the data worse is
+not a success.
 """
 
 import numbers
@@ -38,7 +41,8 @@ import numpy as np
 from ._data import prepare
 from ._options import OEOptions, RECURSIVE, method_options
 from ._predictor import padding, stable_and_finite
-from ._search import Task, search
+from ._problem import Problem
+from ._search import Task, linear_baseline, search
 from .batch import refine as _refine, _progress_range
 from .recursive import RecursiveIdentifier
 from .result import verdict, judge
@@ -81,7 +85,8 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         linear output-error fit of the same total orders (module
         documentation): it is never worse than that linear model.
         ``'rpem'`` is the recursive Gauss-Newton estimator; ``'bundle'``
-        and ``'gradient'`` are the paper's method and its baseline.
+        and ``'gradient'`` are the paper's method and its baseline. They
+        can end worse than the linear fit; ``success`` is then False.
     theta0 : array_like, optional
         Recursive methods only: the starting point (order of eq. (2.5)).
     dt : float or True, optional
@@ -142,8 +147,10 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     -------
     IdentificationResult
         ``model`` (a `SandwichSystem` in the data's units, b0 = 1 and
-        d0 = +-1), ``theta``, ``success`` and ``message``; for ``'oe'``
-        also ``fit``, ``cost``, ``std``, ``linear`` (the baseline),
+        d0 = +-1), ``theta``, ``success`` and ``message``, ``fit``,
+        ``cost`` and ``linear`` (the linear baseline; ``success`` needs a
+        fit at least the baseline's, whatever the method); for ``'oe'``
+        and a refined recursive estimate also ``std``, and for ``'oe'``
         ``significance`` (F-test of the backlash), ``whiteness`` and
         ``integrators``. ``print(res)`` shows them at a glance.
 
@@ -284,8 +291,9 @@ def _identify_recursive(u, y, orders, method, kw):
         warn(str(w.message), w.category if issubclass(
             w.category, SandwichWarning) else IdentificationWarning)
     result = est.result(elapsed=time.perf_counter() - start)
-    judge(result, verdict(estimate=stable_and_finite(result.theta, est._o)))
+    facts = {'estimate': stable_and_finite(result.theta, est._o)}
     if kw['refine']:
+        judge(result, verdict(**facts))     # the recursive pass, kept
         refine = kw['refine']
         kwargs = refine if isinstance(refine, dict) else {}
         refined = _refine(result.model, u, y, progress=kw['progress'],
@@ -295,11 +303,32 @@ def _identify_recursive(u, y, orders, method, kw):
         refined.method = f"{method}+refine"
         refined.elapsed = time.perf_counter() - start
         result = refined
+        facts = {'min_fit': None}           # `refine` judged the rest
+    judge(result, verdict(**facts, **_against_linear(result, u, y, orders,
+                                                     kw['dt'])))
     if kw['name'] is not None:
         m = result.model
         result.model = type(m)(m.L1, m.backlash, m.L2, name=kw['name'],
                                orders=m.orders)
     return result
+
+
+def _against_linear(result, u, y, orders, dt):
+    """The facts of `verdict` that compare a recursive `result` with the
+    linear output-error baseline of the same total orders, fitted as
+    'oe' fits its own (`_search.linear_baseline`, without integrators, as
+    the recursive methods fit none). Sets ``fit``, ``cost`` and
+    ``linear`` on `result`; a model that diverges on the data is judged
+    by its estimate alone."""
+    task = Task([u], [y], orders, method_options('oe', {'integrators': 0}),
+                dt=dt)
+    result.linear = linear_baseline(task)
+    prob = Problem([u], [y], orders, sign=result.model.gain_sign)
+    cost_scaled, result.cost, result.fit = prob.evaluate(result.model)
+    if not np.isfinite(cost_scaled):
+        return {}
+    return dict(fit=result.fit, linear=result.linear,
+                cost_scaled=cost_scaled, method=result.method)
 
 
 def _excitation(model, us):

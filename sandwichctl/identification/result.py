@@ -43,8 +43,8 @@ class Failure(NamedTuple):
 
 def verdict(*, finite=None, stable=None, estimate=None, converged=None,
             zeros_at_bound=(), zero_radius=None, fit=None, min_fit=MIN_FIT,
-            linear=None, cost_scaled=None, std=None, theta=None, labels=(),
-            excitation=None):
+            linear=None, cost_scaled=None, method='oe', std=None, theta=None,
+            labels=(), excitation=None):
     """The checks an identified model fails, in the order they are told.
 
     Every argument is one fact about the model; a fact left at None is
@@ -62,10 +62,13 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
     zeros_at_bound : sequence of str, zero_radius : float
         Blocks with a zero on the search bound |z| = zero_radius.
     fit, min_fit : float
-        The fit (percent) must exceed min_fit.
-    linear : dict, cost_scaled : float
+        The fit (percent) must exceed min_fit (None: checked already, the
+        fit is only told).
+    linear : dict, cost_scaled : float, method : str
         The linear baseline (``fit``, ``cost_scaled``); the model's cost on
-        the same scaled data must not exceed its cost.
+        the same scaled data must not exceed its cost. A model of another
+        method than ``'oe'`` that fails is told that 'oe' starts from the
+        baseline.
     std, theta, labels
         Standard errors: above `POORLY_DETERMINED` of |theta| a parameter
         is poorly determined (not fatal).
@@ -98,13 +101,17 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
                       f"degenerate optimum, where a zero far outside trades "
                       f"against a vanishing slope and a growing width; "
                       f"other orders or delays may suit these data")
-    if fit is not None and not fit > min_fit:
+    if fit is not None and min_fit is not None and not fit > min_fit:
         fail('fit', f"the model does not explain the data (fit {fit:.3g} % "
                     f"<= {min_fit:g} %)")
     if linear is not None and \
             cost_scaled > linear['cost_scaled'] * (1 + 1e-9) + 1e-300:
         fail('linear', f"the fit is worse than the linear baseline "
-                       f"({fit:.3g} % < {linear['fit']:.3g} %)")
+                       f"({fit:.3g} % < {linear['fit']:.3g} %)" + (
+                           "" if method == 'oe' else
+                           ": use method='oe', which starts from that "
+                           "linear model (res.linear['model']) and is "
+                           "never worse"))
     if std is not None:
         ill = ~np.isfinite(std) | (std > POORLY_DETERMINED * np.maximum(
             np.abs(theta), 1e-3))
@@ -263,23 +270,29 @@ class IdentificationResult(OptimizeResult):
     success : bool
         True only if the model is finite and stable (poles on the unit
         circle only where integrators were declared or identified), the
-        optimiser converged, and, for the batch methods, the model
-        explains the data: a fit clearly above 0 and not below the linear
-        baseline. ``message`` says which test failed.
+        optimiser converged, and the model explains the data: a fit
+        clearly above 0 and, for every method of `identify` (recursive
+        ones too), not below the linear baseline. ``message`` says which
+        test failed.
     message : str
         What happened.
     method, options, orders, theta0, nit, elapsed
         The method, its options, the orders, the start, the number of
-        samples or iterations, and the wall time in seconds.
-    fit, cost, std, linear, significance, whiteness, crossing
-        Batch methods only: the fit (percent, as MATLAB's ``compare``) and
-        output-error cost on the estimation data, the parameters'
-        standard errors, the linear output-error baseline of the same
-        total orders (a dict with ``fit``, ``cost``, ``model``), the
-        backlash's F-test against it (`backlash_significance`), the
-        residual whiteness summary (`whiteness`), and where the model's
-        slope lines cross with the share of samples its x spends beyond
-        (``{'x': ..., 'share': ...}``; printed from 10%).
+        samples or iterations, and the wall time in seconds (of a
+        recursive method: the recursion and its refinement, not the
+        baseline).
+    fit, cost, linear
+        The fit (percent, as MATLAB's ``compare``) and output-error cost
+        on the estimation data, and, from `identify`, the linear
+        output-error baseline of the same total orders (a dict with
+        ``fit``, ``cost``, ``model``, ``integrators``; for the recursive
+        methods, which fit no integrators, fitted without).
+    std, significance, whiteness, crossing
+        Batch methods only: the parameters' standard errors, the
+        backlash's F-test against the baseline (`backlash_significance`),
+        the residual whiteness summary (`whiteness`), and where the
+        model's slope lines cross with the share of samples its x spends
+        beyond (``{'x': ..., 'share': ...}``; printed from 10%).
     """
 
     def __init__(self, *args, **kwargs):
