@@ -380,3 +380,22 @@ def test_the_linear_check_goes_through_verdict():
                                      method='rpem')] == ['fit', 'linear']
     assert [f.check for f in verdict(fit=3.0, min_fit=None, linear=linear,
                                      cost_scaled=9)] == ['linear']
+
+
+def test_auto_integrators_never_below_the_integrator_free_linear_fit():
+    """integrators='auto' on a record without an integrator (a slow pole
+    at 0.97 makes it try one): the result is never below the linear
+    output-error fit of the same orders without an integrator."""
+    plant = sw.SandwichSystem.from_coefficients(
+        a=[-0.97], b=[1.0], c=[-0.5], d=[1.0], m1=1.0, m2=1.0, D1=0.2,
+        D2=0.2, dt=1)
+    u = sw.examples.paper_input(1500, seed=3)
+    y = sw.examples.add_noise(plant.simulate(u).outputs, snr=30, seed=4)
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', sw.IdentificationWarning)
+        res = sw.identify(u, y, **plant.orders)
+    o = plant.orders
+    lin0 = sw.identify_linear(u, y, nb=o['nb'] + o['nd'] + 1,
+                              nf=o['na'] + o['nc'], nk=o['q1'] + o['q2'],
+                              integrators=0)
+    assert res.fit >= lin0.fit - 1e-6

@@ -203,3 +203,19 @@ def test_screening_uses_the_leading_samples_of_each_experiment():
     assert _head(parts, 5000) is parts
     assert [h.size for h in _head([np.ones(5000), np.ones(10)], 100)] == [
         100, 10]
+
+
+def test_an_integrator_must_beat_the_integrator_free_linear_fit():
+    """integrators='auto' keeps an integrating sandwich only if it is
+    cheaper than the integrator-free linear fit (the floor of the
+    never-worse promise); a diverged integrator-free search is no evidence
+    for an integrator."""
+    from sandwichctl.identification._search import _integrator_floor
+
+    def fits(cost1, linear0):
+        return {0: (None, {'cost': np.inf}, {'cost_scaled': linear0}),
+                1: (None, {'cost': cost1}, {'cost_scaled': 5.0})}
+    assert _integrator_floor(fits(2.0, 3.0), 1) == 1     # beats it
+    assert _integrator_floor(fits(4.0, 3.0), 1) == 0     # worse: floor
+    assert _integrator_floor(fits(4.0, 3.0), 0) == 0
+    assert _integrator_floor({1: (None, {'cost': 9.0}, {})}, 1) == 1

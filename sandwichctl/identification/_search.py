@@ -142,12 +142,29 @@ def step3_integrators(task, linears):
         return n * np.log(max(out["cost"], 1e-300)) + 2 * prob.st.size
 
     k = min(fits, key=aic)
-    prob, best, linear = fits[k]
+    floor = _integrator_floor(fits, k)
+    prob, best, linear = fits[floor]
     if len(fits) > 1:
         linear['message'] += (
             f"; integrators='auto' chose {k} by AIC of the sandwich fits ("
             + ', '.join(f"{j}: {aic(j):.6g}" for j in sorted(fits)) + ")")
+        if floor != k:
+            linear['message'] += (
+                "; but the integrating sandwich fits worse than the "
+                "integrator-free linear fit, so the integrator-free one "
+                "is kept")
     return prob, best, linear
+
+
+def _integrator_floor(fits, k):
+    """The never-worse-than-linear floor across the integrator decision:
+    an integrating sandwich `k` = 1 is kept only if it is cheaper than the
+    integrator-free linear fit it must beat (a search without an
+    integrator that diverged or stalled is no evidence for one)."""
+    if k == 1 and 0 in fits and \
+            not fits[1][1]['cost'] < fits[0][2]['cost_scaled']:
+        return 0
+    return k
 
 
 def _unintegrated(task, free, integrating):
