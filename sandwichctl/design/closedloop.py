@@ -34,7 +34,7 @@ import control as ct
 from .inverse import _inverse_step
 from .compensator import SandwichCompensator, _check_model
 from .tracking import TrackingController
-from .loop import servo_loop, plant_measure, plant_advance
+from .loop import servo_loop, plant_measure, plant_advance, ss_arrays
 from .servo import ServoController
 from ..model._kernel import _ss_output, _ss_update
 from ..model.sandwich import SandwichSystem, _warn_divergence
@@ -42,15 +42,6 @@ from .._checks import (check_discrete_siso_tf, check_signal, common_dt,
                        check_name)
 
 __all__ = ['closed_loop_system', 'ClosedLoopSystem', 'closed_loop_response']
-
-
-def _ss_arrays(sys):
-    if sys is None:
-        return (np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)),
-                np.zeros((1, 1)))
-    ss = ct.ss(sys)
-    return tuple(np.ascontiguousarray(np.asarray(M, dtype=float))
-                 for M in (ss.A, ss.B, ss.C, ss.D))
 
 
 @numba.njit(cache=True)
@@ -154,16 +145,16 @@ def closed_loop_response(plant, reference, controller, compensator=None):
     r = check_signal('reference', reference)
     d = controller.preview
     r_ahead = np.concatenate([r[d:], np.full(min(d, r.size), r[-1])])
-    Af, Bf, Cf, Df = _ss_arrays(controller.feedforward)
-    Ac, Bc, Cc, Dc = _ss_arrays(controller.feedback)
+    Af, Bf, Cf, Df = ss_arrays(controller.feedforward)
+    Ac, Bc, Cc, Dc = ss_arrays(controller.feedback)
     if compensator is not None:
         Ai, Bi, Ci, Di = compensator.linear_matrices
         ipar = compensator.inverse_parameters
     else:
-        Ai, Bi, Ci, Di = _ss_arrays(None)
+        Ai, Bi, Ci, Di = ss_arrays(None)
         ipar = (1.0, 1.0, 0.0, 0.0, 0.0)
-    A1, B1, C1, D1 = _ss_arrays(plant.L1)
-    A2, B2, C2, D2 = _ss_arrays(plant.L2)
+    A1, B1, C1, D1 = ss_arrays(plant.L1)
+    A2, B2, C2, D2 = ss_arrays(plant.L2)
     bl = plant.backlash
     n = r.size
     y, u, x, v = (np.empty(n) for _ in range(4))

@@ -27,7 +27,12 @@ from .._checks import check_signal, check_positive, check_nonnegative
 __all__ = ['servo_metrics']
 
 
-def _arrays(sys):
+def ss_arrays(sys):
+    """(A, B, C, D) float arrays of a SISO system for the compiled loops;
+    None gives a block without states and a zero gain."""
+    if sys is None:
+        return (np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)),
+                np.zeros((1, 1)))
     ss = ct.ss(sys)
     return tuple(np.ascontiguousarray(np.asarray(M, dtype=float))
                  for M in (ss.A, ss.B, ss.C, ss.D))
@@ -85,10 +90,11 @@ def servo_loop(plant, r, ctrl):
     if isinstance(plant, (SandwichSystem, ct.TransferFunction)):
         if isinstance(plant, SandwichSystem):
             bl = plant.backlash
-            blocks = _arrays(plant.L1) + _arrays(plant.L2)
+            blocks = ss_arrays(plant.L1) + ss_arrays(plant.L2)
             prm = np.array([bl.m1, bl.m2, bl.D1, bl.D2])
         else:
-            blocks = _arrays(plant) + _arrays(ct.tf([1.0], [1.0], plant.dt))
+            blocks = (ss_arrays(plant)
+                      + ss_arrays(ct.tf([1.0], [1.0], plant.dt)))
             prm = np.array([1.0, 1.0, 0.0, 0.0])
         _loop_kernel(ctrl._p, ctrl._ix, ctrl._s, r_ahead, *blocks, prm, y, u)
         _warn_divergence(f"the closed loop of {plant.name}", y, u[-1:],

@@ -39,7 +39,6 @@ that :math:`L_1^{-1}` (a differentiator when L1 integrates) does not turn
 it into a one-sample spike that saturates the drive.
 """
 
-import pickle
 import warnings
 
 import numpy as np
@@ -47,7 +46,7 @@ import control as ct
 
 from . import _servo_design as sd
 from ._servo_kernel import pack, servo_step, servo_run, NSCALAR
-from .loop import servo_loop
+from .loop import servo_loop, ss_arrays
 from .references import servo_reference
 from ..model.sandwich import SandwichSystem
 from .._checks import (check_finite, check_int, check_name,
@@ -73,15 +72,8 @@ SMOOTHING = 0.02
 
 
 def _ss(num, den, dt):
-    """(A, B, C, D) arrays of num/den; a pure gain has no states."""
-    num = np.atleast_1d(np.asarray(num, float))
-    den = np.atleast_1d(np.asarray(den, float))
-    if den.size == 1:
-        return (np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)),
-                np.array([[num[-1] / den[0]]]))
-    sys = ct.ss(ct.tf(num, den, dt))
-    return tuple(np.ascontiguousarray(np.asarray(M, float))
-                 for M in (sys.A, sys.B, sys.C, sys.D))
+    """(A, B, C, D) arrays of num/den (descending powers of z)."""
+    return ss_arrays(ct.tf(num, den, dt))
 
 
 def _unwrap_model(model):
@@ -614,7 +606,7 @@ def _helps_on_model(ctrl, model):
     r = servo_reference(dt, travel)
     errors = []
     for scale in (1.0, 0.0):
-        trial = pickle.loads(pickle.dumps(ctrl))
+        trial = ServoController(ctrl._design)
         trial._p[_scalar_index(trial) + 2:_scalar_index(trial) + 4] *= scale
         with np.errstate(all='ignore'), warnings.catch_warnings():
             warnings.simplefilter('ignore')
