@@ -238,3 +238,25 @@ def test_identified_random_plants_all_get_a_stable_design():
         y = sw.closed_loop_response(case.plant, r, ctrl).outputs[0]
         assert np.all(np.isfinite(y))
         assert np.sqrt(np.mean((r - y) ** 2)) < np.std(r)
+
+
+def test_a_baseline_that_cannot_be_designed_on_falls_back_to_the_sandwich():
+    """A linear baseline with a second pole at z = 1 (as identify fitted on
+    one randomised drive) is not designed on: the sandwich's own mbar L1
+    L2, which identify vouched for, is, and the notes say why."""
+    import types
+    plant = sw.examples.paper_plant()
+    double = ct.tf([0.0, 0.01, 0.005], np.polymul([1, -1], [1, -1 + 1e-8]),
+                   plant.dt)
+    with pytest.raises(ValueError, match="Re-identify with integrators=1"):
+        sw.servo_controller(double)
+    result = types.SimpleNamespace(model=plant, success=True, fit=90.0,
+                                   linear=dict(model=double, fit=80.0))
+    ctrl = sw.servo_controller(result)
+    co = plant.coefficients
+    mbar = 0.5 * (co['m1'] + co['m2'])
+    P = ctrl.design_plant
+    assert np.allclose(np.polyval(P.num[0][0], 1.3) / np.polyval(
+        P.den[0][0], 1.3), mbar * (plant.L1 * plant.L2)(1.3))
+    assert ctrl.margins['pole_radius'] < 1 and ctrl.compensates
+    assert any("baseline cannot be designed on" in n for n in ctrl.notes)

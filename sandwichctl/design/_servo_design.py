@@ -254,6 +254,17 @@ def loop_radius(num, den, C):
     return float(np.max(np.abs(np.roots(char)))) if char.size > 1 else 0.0
 
 
+def crossover(num, den, C):
+    """Frequency (rad/sample) where the loop gain :math:`|C P|` first
+    falls below 1 on the log grid (pi if it never does)."""
+    w = frequency_grid(den)
+    z = np.exp(1j * w)
+    L = (np.polyval(num, z) / np.polyval(den, z)
+         * np.polyval(C.num[0][0], z) / np.polyval(C.den[0][0], z))
+    below = np.flatnonzero(np.abs(L) < 1)
+    return float(w[below[0]]) if below.size else float(np.pi)
+
+
 def loop_margins(num, den, C):
     """(modulus margin, gain margin, phase margin [deg], closed-loop pole
     radius) of the loop C P, read on the log frequency grid."""

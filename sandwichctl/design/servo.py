@@ -108,7 +108,9 @@ def _check_plant_tf(name, sys):
         raise ValueError(
             f"{name} must be stable or have one integrator (a pole at "
             f"z = 1, as a speed-in, position-out axis); got poles "
-            f"{sd._fmt_roots(poles)}")
+            f"{sd._fmt_roots(poles)}. Re-identify with integrators=1 (a "
+            f"speed-in, position-out axis) or integrators=0, or with "
+            f"fewer poles")
     return num, den
 
 
@@ -382,7 +384,10 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     jump_samples : int, optional
         Samples the band jump is spread over, started half of them early
         (default: the fewest for which :math:`L_1^{-1}` keeps the jump's
-        input within twice what holds the far side).
+        input within twice what holds the far side; with an integrating
+        L1, which turns the jump into a speed pulse, at least two time
+        constants :math:`1/\omega_c` of the loop's crossover, so that a
+        load that coasts is not kicked past the reference).
     feedforward_from : {'auto', 'model', 'baseline'}, optional
         What the feedforward inverts, for an identification result of a
         sandwich (whose linear baseline the feedback is always designed
@@ -448,11 +453,23 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                      and isinstance(getattr(result, 'linear', None), dict)
                      else None)
         integrating = bool(np.any(np.abs(np.roots(L1d) - 1) < 1e-6))
+        baseline_note = None
+        if isinstance(lin_model, ct.TransferFunction):
+            try:
+                sd.design_pid(*_check_plant_tf('the baseline', lin_model),
+                              lin_model.dt, mm)
+            except ValueError as exc:
+                # the sandwich is what identify vouched for: design on it
+                lin_model = None
+                baseline_note = (f"the result's linear baseline cannot be "
+                                 f"designed on ({exc}), so ")
         ff_model, linear_note = _feedforward_source(
             feedforward_from, result, lin_model, integrating,
             np.concatenate([model.L1.zeros(), model.L2.zeros()]))
         P = (lin_model if isinstance(lin_model, ct.TransferFunction)
              else mbar * model.L1 * model.L2)
+        if baseline_note:
+            linear_note = baseline_note + linear_note
     else:
         _check_plant_tf('model', model)
         P, linear_note = model, None
@@ -530,8 +547,15 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         band_x = band_fraction_out * (co['D1'] + co['D2'])
         smoothing_out = (SMOOTHING * mbar * band_x if smoothing is None
                          else check_nonnegative('smoothing', smoothing))
-        jump = (_jump_samples(L1n, L1d, band_x, dt) if jump_samples is None
-                else check_int('jump_samples', jump_samples, minimum=1))
+        if jump_samples is None:
+            jump = _jump_samples(L1n, L1d, band_x, dt)
+            if integrating:
+                # L1^-1 turns the jump into a speed pulse: no faster than
+                # the loop follows, or a load that coasts overshoots
+                jump = max(jump, int(round(
+                    JUMP_CROSSOVERS / sd.crossover(num, den, C))))
+        else:
+            jump = check_int('jump_samples', jump_samples, minimum=1)
         lead = jump // 2
         # align the band offset (through L2^-1, the inverse, L1^-1) with
         # the linear feedforward: both reach the plant for the same r(k)
@@ -585,6 +609,12 @@ def _scalar_index(ctrl):
     """Where the scalars start in ctrl._p."""
     return int(ctrl._ix[9])
 
+
+#: with an integrating L1, the band jump is spread over at least this many
+#: time constants 1/w_c of the loop's crossover (chosen on the tuning
+#: drives of benchmarks/bench_servo.py, where it cut the input activity and
+#: kept or lowered the error on every speed loop)
+JUMP_CROSSOVERS = 2.0
 
 #: the default compensation is turned off when it makes the loop around the
 #: identified model this much worse (a gross failure: on the drives the
