@@ -22,10 +22,17 @@ variation against the linear design's (chatter), the most reversals of y
 in the second half of a hold (>= 3 is a limit cycle) and the share of
 ticks at the motor's torque limit. With ``--sweep`` it also scales the
 linear feedback on the play-free drive to find the best linear design of
-the sweep.
+the sweep. With ``--bands`` it runs the sandwich design of every drive at
+fixed band shares too, and prints the RMS ratio to the linear design at
+each: the best share per drive bounds what adapting the share online could
+reach, the worst shows what a larger fixed default would risk. With
+``--to-margin`` it scales the linear design's gains up until the model's
+modulus margin is met with equality (when the crossover limit, not the
+margin, is what bounds them) and runs that on the drive too.
 
 Run: python benchmarks/bench_servo.py [--seeds 2] [--random 8] [--sweep]
-     [--seed0 2 --random0 8] [--feedforward zpetc]
+     [--seed0 2 --random0 8] [--feedforward zpetc] [--bands]
+     [--to-margin]
 """
 
 import argparse
@@ -40,9 +47,12 @@ import control as ct
 sys.path.insert(0, os.path.dirname(__file__))
 import sandwichctl as sw                                   # noqa: E402
 from _timing import print_table                            # noqa: E402
+from sandwichctl.design import _servo_design as sd         # noqa: E402
 
 ORDERS = dict(na=2, nb=1, nc=2, nd=1, q1=1, q2=0)
 LINEAR = dict(nb=3, nf=4, nk=1)
+#: fixed band shares tried with --bands
+BAND_SHARES = (0.1, 0.25, 0.5, 0.75, 1.0)
 
 
 def identify(loop, play, dt, params, seed):
@@ -89,6 +99,28 @@ def scaled(ctrl_lin, factor):
     return sw.servo_controller(ctrl_lin.model, feedback_scale=factor)
 
 
+def to_margin(ctrl, target=0.6, most=4.0):
+    """The largest factor (at most `most`) on the design's PID gains that
+    keeps the model's modulus margin at `target` (servo_controller's
+    default)."""
+    P = ctrl.design_plant
+    num, den = np.trim_zeros(P.num[0][0], 'f'), P.den[0][0]
+
+    def margin(f):
+        C = sd.pid_tf(f * ctrl.kp, f * ctrl.ki, f * ctrl.kd,
+                      ctrl.derivative_pole, ctrl.dt)
+        mm, _, _, radius = sd.loop_margins(num, den, C)
+        return mm if radius < 1 else 0.0
+
+    lo, hi = 1.0, most
+    if margin(hi) >= target:
+        return hi
+    for _ in range(12):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if margin(mid) >= target else (lo, mid)
+    return lo
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument('--seeds', type=int, default=2)
@@ -99,12 +131,17 @@ def main():
     ap.add_argument('--random', type=int, default=6)
     ap.add_argument('--sweep', action='store_true')
     ap.add_argument('--loops', default='position,speed')
+    ap.add_argument('--bands', action='store_true',
+                    help='also run the sandwich design at fixed band shares')
+    ap.add_argument('--to-margin', action='store_true',
+                    help='also run the linear design scaled up to its '
+                    'modulus margin')
     ap.add_argument('--feedforward', default='preview',
                     choices=['preview', 'zpetc'],
                     help='how both designs invert zeros outside the unit '
                     'circle')
     args = ap.parse_args()
-    rows, checks = [], []
+    rows, checks, bands, margin = [], [], [], []
     start = time.perf_counter()
     for label, loop, play, dt, params, seed in cases(
             args.seeds, args.random, args.loops.split(','), args.seed0,
@@ -135,6 +172,24 @@ def main():
                          f"{m_0['rms'] * 1e6:.1f}" if name == 'linear'
                          else '', best if name == 'linear' else '',
                          f"{m['rms'] / m_lin['rms']:.2f}"])
+        if args.bands:
+            ratios = [run(sw.servo_controller(res, band_fraction=b), r, loop,
+                          play, dt, params, seed + 500)['rms'] / m_lin['rms']
+                      for b in BAND_SHARES]
+            bands.append([label, f"{play * 1e6:.0f}",
+                          f"{c_sw.band_fraction:.2f}",
+                          f"{m_sw['rms'] / m_lin['rms']:.2f}",
+                          *(f"{x:.2f}" for x in ratios),
+                          f"{BAND_SHARES[int(np.argmin(ratios))]:.2f}"])
+        if args.to_margin:
+            factor = to_margin(c_lin)
+            m_up = run(sw.servo_controller(lin, feedback_scale=factor), r,
+                       loop, play, dt, params, seed + 500)
+            margin.append([label, f"{play * 1e6:.0f}",
+                           f"{c_lin.margins['modulus']:.2f}",
+                           f"{factor:.2f}", f"{m_lin['rms'] * 1e6:.1f}",
+                           m_lin['hunting'], f"{m_up['rms'] * 1e6:.1f}",
+                           m_up['hunting']])
         checks.append(dict(label=label, play=play, lin=m_lin, sw=m_sw,
                            res=res))
     print("Servo loops on the simulated drive, servo_controller defaults; "
@@ -162,6 +217,15 @@ def main():
         rb = [c['sw']['rms'] / c['lin']['rms'] for c in big]
         print(f"large play (>= 100 um), {len(big)} drives: RMS ratio median "
               f"{np.median(rb):.2f} (goal <= 0.75)")
+    if bands:
+        print("\nSandwich RMS / linear at fixed band shares:\n")
+        print_table(['case', 'play', 'default', 'RMS/lin',
+                     *(f"{b:g}" for b in BAND_SHARES), 'best'], bands)
+    if margin:
+        print("\nLinear design scaled up to its modulus margin (RMS um / "
+              "hunt):\n")
+        print_table(['case', 'play', 'margin', 'scale', 'RMS', 'hunt',
+                     'scaled RMS', 'hunt'], margin)
 
 
 if __name__ == '__main__':

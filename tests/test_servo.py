@@ -260,3 +260,29 @@ def test_a_baseline_that_cannot_be_designed_on_falls_back_to_the_sandwich():
         P.den[0][0], 1.3), mbar * (plant.L1 * plant.L2)(1.3))
     assert ctrl.margins['pole_radius'] < 1 and ctrl.compensates
     assert any("baseline cannot be designed on" in n for n in ctrl.notes)
+
+
+def test_an_integrating_l1_gets_its_band_jump_spread_over_the_loop():
+    """With an integrator in L1, L1^-1 turns the band jump into a speed
+    pulse: by default it is spread over at least two time constants of the
+    loop's crossover, so the input steps far less than with the jump in
+    one sample."""
+    import types
+    from sandwichctl.design import _servo_design as sd
+    plant = sw.SandwichSystem.from_coefficients(
+        a=[-1.0], b=[0.05], c=[-0.8], d=[0.2], m1=1.0, m2=1.0, D1=0.2,
+        D2=0.2, dt=1e-3)
+    lin = 1.0 * plant.L1 * plant.L2
+    result = types.SimpleNamespace(model=plant, success=True, fit=95.0,
+                                   linear=dict(model=lin, fit=90.0))
+    ctrl = sw.servo_controller(result)
+    P = ctrl.design_plant
+    wc = sd.crossover(np.trim_zeros(P.num[0][0], 'f'), P.den[0][0],
+                      ctrl.pid)
+    assert ctrl.jump_samples >= round(2.0 / wc) > 1
+    one = sw.servo_controller(result, jump_samples=1)
+    r = 3.0 * np.sin(2 * np.pi * np.arange(3000) / 1000)
+    # the reversals, away from the start and the end of the reference
+    du = [np.max(np.abs(np.diff(sw.closed_loop_response(
+        plant, r, c).outputs[1]))[100:2900]) for c in (ctrl, one)]
+    assert du[0] < 0.5 * du[1]

@@ -165,7 +165,7 @@ def low_frequency_sign(num, den):
     pole at z = 1)."""
     poles = np.roots(den) if den.size > 1 else np.zeros(0)
     one = np.abs(poles - 1) < 1e-6
-    rest = np.real(np.poly(poles[~one])) if one.any() else den
+    rest = np.atleast_1d(np.real(np.poly(poles[~one]))) if one.any() else den
     return 1.0 if np.polyval(num, 1.0) / np.polyval(rest, 1.0) >= 0 else -1.0
 
 

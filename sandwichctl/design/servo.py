@@ -302,7 +302,7 @@ def _static_inverse(num, den):
     poles = np.roots(den) if den.size > 1 else np.zeros(0)
     one = np.abs(poles - 1) < 1e-6
     if one.any():
-        rest = np.real(np.poly(poles[~one]))
+        rest = np.atleast_1d(np.real(np.poly(poles[~one])))
         g = np.polyval(num, 1.0) / np.polyval(rest, 1.0)
         return np.array([1.0, -1.0]) / g, np.r_[1.0, np.zeros(q)], q
     return (np.array([np.polyval(den, 1.0) / np.polyval(num, 1.0)]),
