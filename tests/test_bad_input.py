@@ -41,6 +41,17 @@ U2K = sw.examples.paper_input(2000, seed=0)
 Y2K = PLANT.simulate(U2K).outputs
 
 
+class _NanPlant:
+    """A user plant whose sensor fails: its second reading is NaN."""
+
+    def __init__(self):
+        self.k = 0
+
+    def step(self, u):
+        self.k += 1
+        return np.nan if self.k == 2 else 0.0
+
+
 def _nan_at(k, n=N):
     x = np.ones(n)
     x[k] = np.nan
@@ -525,6 +536,12 @@ ROWS = [
      lambda t: sw.servo_controller(PLANT).reset(y=np.nan), VE, 'y'),
     ('ServoController-run',
      lambda t: sw.servo_controller(PLANT).run(U, U[:3]), VE, 'y'),
+    ('ServoController-step',
+     lambda t: sw.servo_controller(PLANT).step(0.0, np.nan), VE, 'finite'),
+    ('closed_loop_response-servo-plant-nan',
+     lambda t: sw.closed_loop_response(_NanPlant(), U,
+                                       sw.servo_controller(PLANT)), VE,
+     'plant returned'),
     ('closed_loop_response-servo-plant',
      lambda t: sw.closed_loop_response(BL, U, sw.servo_controller(PLANT)),
      TE, 'plant'),

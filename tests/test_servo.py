@@ -286,3 +286,17 @@ def test_an_integrating_l1_gets_its_band_jump_spread_over_the_loop():
     du = [np.max(np.abs(np.diff(sw.closed_loop_response(
         plant, r, c).outputs[1]))[100:2900]) for c in (ctrl, one)]
     assert du[0] < 0.5 * du[1]
+
+
+def test_a_bad_reading_raises_and_leaves_the_memory_as_it_was():
+    ctrl = sw.servo_controller(AXIS)
+    for k in range(20):
+        ctrl.step(1e-3, 0.0)
+    memory = ctrl.state
+    with pytest.raises(ValueError, match="memory is unchanged"):
+        ctrl.step(1e-3, np.nan)
+    with pytest.raises(ValueError, match="finite"):
+        ctrl.step(np.inf, 0.0)
+    assert np.array_equal(ctrl.state, memory)
+    assert ctrl.step(1e-3, 0.0) == sw.servo_controller(AXIS).run(
+        np.full(21, 1e-3), np.zeros(21))[-1]

@@ -104,6 +104,10 @@ def servo_loop(plant, r, ctrl):
         plant.reset()
     yk = float(plant.read()) if hasattr(plant, 'read') else 0.0
     for k in range(n):
+        if not np.isfinite(yk):
+            raise ValueError(
+                f"the plant returned y = {yk!r} at sample {k} "
+                f"({'read' if k == 0 else 'step'}); the loop stops there")
         uk = servo_step(ctrl._p, ctrl._ix, ctrl._s, r_ahead[k], yk)
         y[k], u[k] = yk, uk
         if k + 1 < n:

@@ -39,6 +39,7 @@ that :math:`L_1^{-1}` (a differentiator when L1 integrates) does not turn
 it into a one-sample spike that saturates the drive.
 """
 
+import math
 import warnings
 
 import numpy as np
@@ -199,9 +200,15 @@ class ServoController(ct.NonlinearIOSystem):
 
     def step(self, r_ahead, y):
         """One sample: the reference `preview` samples ahead and the y(k)
-        just measured in; u(k) out."""
-        return servo_step(self._p, self._ix, self._s, float(r_ahead),
-                          float(y))
+        just measured in; u(k) out. A value that is not finite raises
+        before the memory is touched, so one bad reading does not poison
+        every later sample."""
+        r, yk = float(r_ahead), float(y)
+        if not (math.isfinite(r) and math.isfinite(yk)):
+            raise ValueError(f"r_ahead and y must be finite; got "
+                             f"r_ahead={r!r}, y={yk!r} (the controller's "
+                             f"memory is unchanged)")
+        return servo_step(self._p, self._ix, self._s, r, yk)
 
     def run(self, r_ahead, y):
         """`step` over given sequences from the current memory (open loop:
