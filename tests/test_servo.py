@@ -300,3 +300,20 @@ def test_a_bad_reading_raises_and_leaves_the_memory_as_it_was():
     assert np.array_equal(ctrl.state, memory)
     assert ctrl.step(1e-3, 0.0) == sw.servo_controller(AXIS).run(
         np.full(21, 1e-3), np.zeros(21))[-1]
+
+
+@pytest.mark.parametrize('zero, source', [(3.9, 'sandwich'), (1.1, 'baseline')])
+def test_a_far_zero_outside_does_not_block_the_sandwich_feedforward(
+        zero, source):
+    """A zero far outside the unit circle is inverted exactly with a few
+    samples of preview, so the feedforward still inverts the sandwich's
+    own linear part; one near the circle (its series too long) does not."""
+    import types
+    plant = sw.SandwichSystem(
+        ct.tf([0.3], [1, -0.7], 1e-3), sw.Backlash(1.0, 1.0, 0.1, 0.1),
+        ct.tf(np.array([-1.0, zero]) / (zero - 1), [1, -0.5, 0.0], 1e-3))
+    lin = ct.tf([0.3, 0.0], [1, -0.7], 1e-3) * plant.L2
+    result = types.SimpleNamespace(model=plant, success=True, fit=95.0,
+                                   linear=dict(model=lin, fit=90.0))
+    ctrl = sw.servo_controller(result)
+    assert f"feedforward inverts the {source}" in " ".join(ctrl.notes)

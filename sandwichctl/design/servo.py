@@ -261,7 +261,14 @@ def _rebuild(design, name, state, operating_point):
     return ctrl
 
 
-def _feedforward_source(choice, result, lin_model, integrating, zeros):
+def _far(max_preview):
+    """Modulus beyond which a zero's anticausal series needs at most
+    `max_preview` samples (its inverse is then exact enough)."""
+    return sd.SERIES_TOL ** (-1.0 / max(max_preview, 1))
+
+
+def _feedforward_source(choice, result, lin_model, integrating, zeros,
+                        max_preview):
     """Whether the feedforward inverts the sandwich's own mbar L1 L2
     (else the linear baseline), and a note saying why."""
     if choice not in ('auto', 'model', 'baseline'):
@@ -278,7 +285,8 @@ def _feedforward_source(choice, result, lin_model, integrating, zeros):
         # zeros outside the unit circle that the preview inverse cannot
         # just keep by their DC gain (sampling zeros on the negative real
         # axis it can)
-        outside = (np.abs(zeros) >= 1) & (np.real(zeros) >= sd.RINGING)
+        outside = ((np.abs(zeros) >= 1) & (np.real(zeros) >= sd.RINGING)
+                   & (np.abs(zeros) < _far(max_preview)))
         use = not integrating and gap >= MODEL_FF_GAP and not outside.any()
         why = (f"the sandwich fits {gap:.1f} points better than the "
                f"baseline (" + ("at least " if gap >= MODEL_FF_GAP
@@ -400,8 +408,10 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         sandwich (whose linear baseline the feedback is always designed
         on): the sandwich's :math:`\bar m L_1 L_2` ('model'), the
         baseline, or by default the sandwich's when L1 does not integrate,
-        L1 L2 has no zero outside the unit circle (sampling zeros with a
-        real part below -0.5 aside) and the sandwich fits at least 2 points
+        L1 L2 has no zero outside the unit circle that its inverse could
+        not follow (sampling zeros with a real part below -0.5, and zeros
+        far enough out for their anticausal series to fit in
+        `max_preview` samples, aside) and the sandwich fits at least 2 points
         better than the baseline (the play then distorts the baseline's
         dynamics), with half the band compensated.
     feedback_scale : float, optional
@@ -472,7 +482,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                                  f"designed on ({exc}), so ")
         ff_model, linear_note = _feedforward_source(
             feedforward_from, result, lin_model, integrating,
-            np.concatenate([model.L1.zeros(), model.L2.zeros()]))
+            np.concatenate([model.L1.zeros(), model.L2.zeros()]),
+            max_preview)
         P = (lin_model if isinstance(lin_model, ct.TransferFunction)
              else mbar * model.L1 * model.L2)
         if baseline_note:
