@@ -52,7 +52,7 @@ from sandwichctl.design import _servo_design as sd         # noqa: E402
 ORDERS = dict(na=2, nb=1, nc=2, nd=1, q1=1, q2=0)
 LINEAR = dict(nb=3, nf=4, nk=1)
 #: fixed band shares tried with --bands
-BAND_SHARES = (0.1, 0.25, 0.5, 0.75, 1.0)
+BAND_SHARES = (0.0, 0.1, 0.25, 0.5, 0.75, 1.0)
 
 
 def identify(loop, play, dt, params, seed):

@@ -761,6 +761,8 @@ ROWS = [
      lambda t: sw.data.servo_drive(U, loop='bogus'), VE, 'loop'),
     ('data.servo_drive-reference',
      lambda t: sw.data.servo_drive(_nan_at(3)), VE, 'reference'),
+    ('data.servo_drive-contact',
+     lambda t: sw.data.servo_drive(U, contact=0.5), VE, 'contact'),
     ('data.ServoDrive-loop', lambda t: sw.data.ServoDrive('torque'), VE,
      'loop'),
     ('data.ServoDrive-n', lambda t: sw.data.ServoDrive(n=0), VE, 'n'),

@@ -93,3 +93,27 @@ def test_drive_argument_checks():
         servo_drive(ref, Kv=0.0)
     with pytest.raises(ValueError, match='reference'):
         servo_drive([0.0, np.nan])
+
+
+def test_hertzian_contact_law():
+    """p = 1.5 (Hertzian, Hunt-Crossley damping) runs, differs from the
+    linear contact only by a little, and the stepped drive equals the
+    simulation bit for bit; p outside [1, 3] is refused."""
+    from sandwichctl.data import ServoDrive
+    ref = drive_reference(1500, 'position', rng=4)
+    y1 = servo_drive(ref, seed=2)
+    y15 = servo_drive(ref, seed=2, contact=1.5)
+    assert np.all(np.isfinite(y15))
+    assert 0 < np.max(np.abs(y15 - y1)) < 0.05 * np.ptp(y1)
+    drive = ServoDrive(seed=2, n=ref.size, contact=1.5)
+    stepped = [drive.read()] + [drive.step(u) for u in ref[:-1]]
+    assert np.array_equal(stepped, y15)
+    for bad in (0.5, 3.5, np.nan):
+        with pytest.raises(ValueError, match='contact'):
+            servo_drive(ref[:10], contact=bad)
+
+
+def test_random_drives_vary_the_contact_law():
+    from sandwichctl.data import random_drive
+    laws = {random_drive(k)['params'].get('contact', 1.0) for k in range(16)}
+    assert laws == {1.0, 1.5}

@@ -49,7 +49,16 @@ counts       65536   motor-encoder counts per revolution (0: ideal)
 resolution   1e-6    linear-encoder resolution [m]
 torque_noise 2e-3    std of a white torque disturbance per sample [N m]
 substeps     40      integration sub-steps per sample
+contact      1.0     exponent p of the contact law (see below)
+d0           1e-6    reference deflection of the contact law [m]
 ============ ======= =====================================================
+
+The contact force at a deflection :math:`\delta > 0` beyond the gap, with
+:math:`s = \delta / d_0` and relative speed :math:`\dot\delta`, is
+:math:`F = k d_0 s^p + c\, s^{p-1} \dot\delta` (pushing only): with
+p = 1 the linear spring and damper, with p = 1.5 a Hertzian contact of
+the balls with Hunt-Crossley damping, whose force grows from zero
+without a jump when the gap closes.
 
 With these values the speed loop crosses over at about 200 rad/s
 (Kv / (J + M lead^2 / (2 pi)^2)) and the position loop at about 40 rad/s.
@@ -89,6 +98,10 @@ DRIVE_PARAMETERS = {
     'resolution': (1e-6, 'm', 'linear-encoder resolution'),
     'torque_noise': (2e-3, 'N m', 'std of a white torque disturbance'),
     'substeps': (40, '1', 'integration sub-steps per sample'),
+    'contact': (1.0, '1', 'exponent p of the contact law (1: linear '
+                'spring and damper; 1.5: Hertzian, Hunt-Crossley damping)'),
+    'd0': (1e-6, 'm', 'deflection at which a contact law with p != 1 has '
+           'the force of the linear one'),
 }
 
 _NONNEGATIVE = ('B', 'c', 'Fc', 'b', 'Ki_pos', 'torque_noise')
@@ -103,6 +116,11 @@ def _params(params):
             f"unknown servo-drive parameter(s) {unknown}; valid names are "
             f"{sorted(DRIVE_PARAMETERS)} (see DRIVE_PARAMETERS)")
     out = {}
+    law = params.get('contact', 1.0)
+    if isinstance(law, (int, float, np.floating, np.integer)) and \
+            not isinstance(law, bool) and not 1.0 <= law <= 3.0:
+        raise ValueError(f"contact [1] must be in [1, 3] (1: linear, 1.5: "
+                         f"Hertzian); got {law!r}")
     for key, (value, unit, _) in DRIVE_PARAMETERS.items():
         value = params.get(key, value)
         label = f"{key} [{unit}]"
@@ -141,6 +159,7 @@ def _drive_step(state, ref, position_loop, prm, play, dt, nsub, disturbance):
     k, c, Fc, vs, b = prm[5], prm[6], prm[7], prm[8], prm[9]
     Kv, Ti, Kp, Ki_pos = prm[10], prm[11], prm[12], prm[13]
     q_motor = prm[14]
+    law, d0 = prm[16], prm[17]
     h = dt / nsub
     g = 0.5 * play
     th, w, p, vp = state[_TH], state[_W], state[_P], state[_VP]
@@ -175,11 +194,19 @@ def _drive_step(state, ref, position_loop, prm, play, dt, nsub, disturbance):
         delta = r * th - p
         dv = r * w - vp
         if delta > g:
-            F = k * (delta - g) + c * dv
+            if law == 1.0:
+                F = k * (delta - g) + c * dv
+            else:
+                sc = (delta - g) / d0
+                F = k * d0 * sc ** law + c * sc ** (law - 1.0) * dv
             if F < 0.0:
                 F = 0.0
         elif delta < -g:
-            F = k * (delta + g) + c * dv
+            if law == 1.0:
+                F = k * (delta + g) + c * dv
+            else:
+                sc = -(delta + g) / d0
+                F = -k * d0 * sc ** law + c * sc ** (law - 1.0) * dv
             if F > 0.0:
                 F = 0.0
         else:
@@ -293,7 +320,7 @@ def _setup(loop, play, dt, seed, n, params):
     prm = np.array([p['J'], p['B'], p['T_max'], p['lead'] / (2 * np.pi),
                     p['M'], p['k'], p['c'], p['Fc'], p['vs'], p['b'],
                     p['Kv'], p['Ti'], p['Kp'], p['Ki_pos'], q_motor,
-                    p['resolution']])
+                    p['resolution'], p['contact'], p['d0']])
     return _Setup(loop == 'position', prm, play, dt, p['substeps'],
                   disturbance, offset, p)
 
@@ -481,7 +508,8 @@ def random_drive(seed):
     (scaled with the reflected inertia so the speed loop crosses over at
     100-300 rad/s) and integral time Ti 10-40 ms, the position gain Kp
     20-60 1/s, the sample time 0.25-2 ms, the linear encoder's resolution
-    0.1-5 um and the torque disturbance 0.5-5e-3 N m.
+    0.1-5 um, the torque disturbance 0.5-5e-3 N m, and the contact law
+    (linear, or Hertzian with Hunt-Crossley damping, even odds).
 
     Parameters
     ----------
@@ -523,6 +551,11 @@ def random_drive(seed):
     dt = logu(0.25e-3, 2e-3)
     # enough sub-steps to resolve the contact frequency sqrt(k/M)
     params['substeps'] = int(np.ceil(dt * np.sqrt(params['k'] / M) / 0.03))
+    # the contact law is drawn last, so the draws above are those of the
+    # drives before it was varied
+    if rng.uniform() < 0.5:
+        # Hertzian: stiffer under load, so twice the sub-steps
+        params.update(contact=1.5, substeps=2 * params['substeps'])
     return dict(loop=loop, play=play, dt=dt, params=params)
 
 
