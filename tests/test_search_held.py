@@ -13,7 +13,8 @@ import sandwichctl as sw
 from sandwichctl.identification._linear import fit_blocks
 from sandwichctl.identification._options import OEOptions
 from sandwichctl.identification._problem import Parametrisation
-from sandwichctl.identification._search import Search, Task, step1_units
+from sandwichctl.identification._search import (Search, Task, held_note,
+                                                step1_units)
 from sandwichctl.identification._starts import holds, unsplit
 
 ORDERS = dict(na=1, nb=0, nc=1, nd=0, q1=1, q2=0)
@@ -168,3 +169,27 @@ def test_the_fallback_is_the_held_model_with_its_own_message(pair_case):
     assert out['fallback'] and out['cost'] <= search.held['cost']
     assert 'best linear model this structure holds' in out['message']
     assert 'improved on the linear fit' not in out['message']
+
+
+@pytest.mark.parametrize('orders, i1, roots, raised', [
+    (dict(na=1, nb=1, nc=1, nd=1), 0, {'zeros': [0.5 + 0.5j, 0.5 - 0.5j]},
+     'nb = 2'),
+    (dict(na=2, nb=0, nc=1, nd=0), 1, {'poles': [PAIR, np.conj(PAIR)]},
+     'na = 3'),
+    (dict(na=1, nb=1, nc=1, nd=1), 0, {'poles': [PAIR, np.conj(PAIR)],
+                                       'zeros': [0.5j, -0.5j]},
+     'na = 2 and nb = 2'),
+])
+def test_held_note_names_the_roots_and_the_orders_that_hold_them(
+        orders, i1, roots, raised):
+    """The note of the verdict: the pairs (rounded) and the least raised
+    orders that hold them (integrators counted in na)."""
+    o = dict(orders, q1=1, q2=0)
+    st = Parametrisation(tuple(o.values()), i1)
+    roots = {k: np.array(v, complex) for k, v in roots.items()}
+    note = held_note(o, st, roots, 81.234)
+    for kind, rs in roots.items():
+        pair = rs[rs.imag > 0][0]
+        assert f"its {kind} {pair.real:.3g}\u00b1{pair.imag:.3g}j" in note
+    assert f"a structure with {raised} holds them" in note
+    assert 'fit 81.2 %' in note and 'sw.select_structure' in note
