@@ -134,14 +134,14 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         returned model's own `simulate` starts from rest.
     minimum_phase : {None, False, 'L1'}, optional
         ``'oe'`` only. ``'L1'``: L1's zeros are kept inside the unit
-        circle (|z| < 0.999), as for the motor and inner loop of a drive,
-        so that L1 can be inverted exactly (e.g. by a servo controller's
-        feedforward): every start has them reflected inside (1 / conj(z),
-        the same magnitude response) and every step keeps them there.
-        ``res.minimum_phase`` records it. Default None (or False): no
-        constraint, the search of before. The linear baseline stays
-        unconstrained, so a constrained model that fits worse than it is
-        not a success.
+        circle (``|z| < 0.999``), as for the motor and inner loop of a
+        drive, so that L1 can be inverted exactly (e.g. by a servo
+        controller's feedforward): every start has them reflected
+        inside (1 / conj(z), the same magnitude response) and every step
+        keeps them there. ``res.minimum_phase`` records it. Default
+        None (or False): no constraint, the search of before. The linear
+        baseline stays unconstrained, so a constrained model that fits
+        worse than it is not a success.
     **options
         The method's options (each method's defaults and checks are one
         frozen dataclass in ``_options``; an option or argument that does
