@@ -12,7 +12,10 @@ one integrator.
 """
 
 import numpy as np
+from scipy.optimize import least_squares
 from scipy.signal import lfilter
+
+from ._problem import integrator_poly
 
 __all__ = []
 
@@ -354,6 +357,77 @@ class _OutputError:
                     theta=s['theta'].copy(), std=std, cost=cost, yhat=yhat,
                     offsets=off, nit=s['nit'], converged=bool(converged),
                     message=message)
+
+
+def fit_blocks(u, y, x0, sizes, *, nk, integrators=(0, 0), offsets=False,
+               max_iter=100, radius=RADIUS):
+    """Output-error fit of a linear model in the product form of two
+    blocks, y = g q^-nk B1 B2 / (A1 A2) u (scaled data, as `fit_oe`).
+
+    The model a sandwich with a closed backlash is: each block has its
+    own orders, so a complex pair of roots fits only in a block of order
+    two or more.
+
+    Parameters
+    ----------
+    u, y : lists of ndarray
+        Input and output experiments, each from zero initial conditions.
+    x0 : ndarray
+        The start, [c', a', g, b, d]: the free monic denominators of the
+        second and first block without their leading 1, the gain, and the
+        monic numerators of the first and second block without it.
+    sizes : tuple of int
+        (nc', na', nb, nd): the lengths of c', a', b and d.
+    nk : int
+        Delay.
+    integrators : tuple of int
+        Poles fixed at z = 1 in the first and second block.
+    offsets : bool
+        Also fit a constant output offset per experiment (projected out).
+    max_iter : int
+        Most Jacobian evaluations of the trust-region solver.
+    radius : float
+        The free poles stay inside it (default `RADIUS`).
+
+    Returns
+    -------
+    dict
+        ``x`` (as `x0`), ``B`` and ``F`` (the product model, as `fit_oe`
+        gives them), ``cost`` and ``offsets`` (one per experiment).
+    """
+    nc, na, nb, nd = sizes
+    cut = np.cumsum([nc, na, 1, nb])
+    ys = _segs(y)
+    y_all = np.concatenate(ys)
+    far = np.full(y_all.size, 1e3 * (np.std(y_all) + 1.0))
+
+    def model(x):
+        c, a, g, b, d = np.split(x, cut)
+        den = [np.convolve(np.r_[1.0, a], integrator_poly(integrators[0])),
+               np.convolve(np.r_[1.0, c], integrator_poly(integrators[1]))]
+        return (g[0] * np.convolve(np.r_[1.0, b], np.r_[1.0, d]),
+                np.convolve(*den))
+
+    def output(x):
+        return _simulate(*model(x), u, nk)
+
+    def residuals(x):
+        c, a = x[:nc], x[nc:nc + na]
+        if max(max_root(np.r_[1.0, c]), max_root(np.r_[1.0, a])) >= radius:
+            return far
+        with np.errstate(all='ignore'):
+            r = _centred(y_all - output(x), ys, offsets)
+        return r if np.all(np.isfinite(r)) else far
+
+    with np.errstate(all='ignore'):
+        x = least_squares(residuals, np.asarray(x0, float), method='trf',
+                          x_scale='jac', max_nfev=max_iter * (x0.size + 1)).x
+    r = y_all - output(x)
+    off = np.array([part.mean() for part in _split(r, ys)]) if offsets \
+        else np.zeros(len(ys))
+    B, F = model(x)
+    return dict(x=x, B=B, F=F, cost=_cost(_centred(r, ys, offsets), 0.0),
+                offsets=off)
 
 
 def wants_integrator(Ff):

@@ -44,7 +44,9 @@ def lm(st, phi, u, y, max_iter=100, tol=1e-10, *, m_min=1e-9, sp=False,
     """Levenberg-Marquardt on the output-error cost, from an admissible phi.
 
     Every accepted step lowers the cost and keeps the structure stable, so
-    the final cost is at most the starting cost. With ``sp`` the
+    the final cost is at most the starting cost (of the start with L1's
+    zeros reflected inside, for a minimum-phase L1:
+    `Parametrisation.minimum_phase_start`). With ``sp`` the
     series-parallel prediction error is minimised instead (a smoother
     cost, biased under noise: a way to a start). ``fixed`` (a boolean
     mask) holds some parameters at their values.
@@ -56,6 +58,7 @@ def lm(st, phi, u, y, max_iter=100, tol=1e-10, *, m_min=1e-9, sp=False,
         ``message``.
     """
     free = slice(None) if fixed is None else ~np.asarray(fixed)
+    phi = st.minimum_phase_start(phi)
     r, J, _ = st.jacobian(phi, u, y, sp)
     cost = 0.5 * float(r @ r)
     if not (np.isfinite(cost) and np.all(np.isfinite(J))):

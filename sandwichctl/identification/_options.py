@@ -25,6 +25,21 @@ RECURSIVE = ('bundle', 'gradient', 'rpem')
 METHODS = ('oe',) + RECURSIVE
 
 
+#: The blocks `identify` can keep minimum-phase (``minimum_phase=``).
+MINIMUM_PHASE = ('L1',)
+
+
+def check_minimum_phase(value):
+    """``minimum_phase`` checked: None (also for False) or 'L1'."""
+    if value is None or value is False:
+        return None
+    if isinstance(value, str) and value in MINIMUM_PHASE:
+        return value
+    raise ValueError(f"minimum_phase must be None, False or one of "
+                     f"{list(MINIMUM_PHASE)} (the block whose zeros are "
+                     f"kept inside the unit circle); got {value!r}")
+
+
 class _Options:
     """Base of the option classes: frozen, checked on construction."""
 
@@ -53,6 +68,8 @@ class OEOptions(_Options):
         Where the integrators go.
     initial_state : {'zero', 'estimate'}
         Each experiment from rest, or its past values estimated.
+    minimum_phase : {None, 'L1'}
+        'L1' keeps L1's zeros inside the unit circle (`MINIMUM_PHASE`).
     widths : sequence of float
         Relative backlash widths the nested starts open to (step 4).
     max_splits : int
@@ -79,6 +96,7 @@ class OEOptions(_Options):
     integrators: object = 'auto'
     integrator_block: str = 'L1'
     initial_state: str = 'zero'
+    minimum_phase: object = None
     widths: tuple = (0.05, 0.25)
     screen_iter: int = 8
     keep: int = 3
@@ -99,7 +117,8 @@ class OEOptions(_Options):
     method = 'oe'
     #: The fields that are arguments of `identify` itself; the others tune
     #: the search (``res.options``).
-    ARGUMENTS = ('integrators', 'integrator_block', 'initial_state')
+    ARGUMENTS = ('integrators', 'integrator_block', 'initial_state',
+                 'minimum_phase')
     _MINIMA = dict(screen_iter=1, sp_iter=0, sp_starts=0, n_random=0, seed=0,
                    keep=1, refits=0, max_splits=1, hops=0, relocate=0,
                    screen_samples=100, max_iter=1)
@@ -115,6 +134,7 @@ class OEOptions(_Options):
                              f"{self.integrator_block!r}")
         check_option('initial_state', self.initial_state,
                      ('zero', 'estimate'))
+        self._set('minimum_phase', check_minimum_phase(self.minimum_phase))
         widths = self.widths
         if np.ndim(widths) != 1 or not all(
                 isinstance(w, numbers.Real) and 0 < w < 10 for w in widths):

@@ -38,6 +38,9 @@ STABILITY_MARGIN = 1e-4
 #: infinity trades for a vanishing slope m and a growing width D, a
 #: degenerate valley that looks like one more sample of delay.
 ZERO_RADIUS = 20.0
+#: With a minimum-phase L1 (``identify(..., minimum_phase='L1')``), L1's
+#: zeros are kept inside |z| < MINIMUM_PHASE_RADIUS.
+MINIMUM_PHASE_RADIUS = 1 - 1e-3
 
 
 def integrator_poly(i):
@@ -63,10 +66,13 @@ class Parametrisation:
     n_offsets, n_inits : int
         Experiments with an output offset, and with initial conditions,
         estimated (their entries follow the model's in phi).
+    minimum_phase : {None, 'L1'}
+        'L1': L1's zeros are kept inside `MINIMUM_PHASE_RADIUS` (`stable`;
+        `minimum_phase_start` moves a start there).
     """
 
     def __init__(self, orders, i1=0, i2=0, *, zero_radius=ZERO_RADIUS,
-                 n_offsets=0, n_inits=0):
+                 n_offsets=0, n_inits=0, minimum_phase=None):
         na, nb, nc, nd, q1, q2 = orders
         if not (0 <= i1 <= na and 0 <= i2 <= nc):
             raise ValueError(f"integrators ({i1}, {i2}) exceed the orders "
@@ -79,6 +85,7 @@ class Parametrisation:
         self.im = self.nc_free + self.na_free      # m1 in phi
         self.im_theta = nc + na                    # m1 in theta
         self.zero_radius = zero_radius
+        self.minimum_phase = minimum_phase
         self.n_off = n_offsets                     # output offsets, next
         self.init_sizes = init_sizes(self.o)
         self.n_init = sum(self.init_sizes)         # per experiment
@@ -126,13 +133,42 @@ class Parametrisation:
 
     def stable(self, phi):
         """Finite, the free denominators strictly stable and the zeros
-        inside `zero_radius`."""
+        inside `zero_radius` (L1's inside `MINIMUM_PHASE_RADIUS` with a
+        minimum-phase L1)."""
         nb, nd = self.o[1], self.o[3]
         ib = self.im + 4
         margin = 1.0 - self.zero_radius
+        l1_margin = 1.0 - MINIMUM_PHASE_RADIUS if self.minimum_phase \
+            else margin
         return (self.poles_stable(phi)
-                and is_stable(phi, ib, nb, margin)
+                and is_stable(phi, ib, nb, l1_margin)
                 and is_stable(phi, ib + nb, nd, margin))
+
+    def minimum_phase_start(self, phi):
+        """phi with L1's zeros outside `MINIMUM_PHASE_RADIUS` reflected to
+        1 / conj(z) (an all-pass factor apart, the same magnitude
+        response: the slopes times |z| and the widths over it keep the
+        backlash output), and those still outside pulled in to it; phi
+        itself without a minimum-phase L1 or with L1's zeros inside."""
+        nb, ib = self.o[1], self.im + 4
+        if not (self.minimum_phase and nb) or \
+                is_stable(phi, ib, nb, 1.0 - MINIMUM_PHASE_RADIUS):
+            return phi
+        with np.errstate(all='ignore'):
+            z = np.roots(np.r_[1.0, phi[ib:ib + nb]])
+        if not np.all(np.isfinite(z)):
+            return phi
+        inside = 0.99 * MINIMUM_PHASE_RADIUS
+        far = np.abs(z) > inside
+        k = float(np.prod(np.abs(z[far])))   # L1's gain over the new one's
+        z[far] = 1 / np.conj(z[far])
+        far = np.abs(z) > inside
+        z[far] *= inside / np.abs(z[far])
+        phi = phi.copy()
+        phi[ib:ib + nb] = np.real(np.poly(z))[1:]
+        phi[self.im:self.im + 2] *= k
+        phi[self.im + 2:self.im + 4] /= k
+        return phi
 
     def poles_stable(self, phi):
         """Finite, and the free denominators strictly stable."""
@@ -150,6 +186,17 @@ class Parametrisation:
                 z = np.roots(np.r_[1.0, phi[start:start + n]])
                 self.zero_radius = max(self.zero_radius,
                                        1.5 * float(np.max(np.abs(z))))
+
+    def minimum_phase_bound(self, phi, share=0.99):
+        """`MINIMUM_PHASE_RADIUS` if L1 is kept minimum-phase and a zero
+        of L1 is at |z| >= share times it, else None."""
+        nb, ib = self.o[1], self.im + 4
+        if not (self.minimum_phase and nb):
+            return None
+        with np.errstate(all='ignore'):
+            z = np.roots(np.r_[1.0, phi[ib:ib + nb]])
+        return MINIMUM_PHASE_RADIUS if np.any(
+            np.abs(z) >= share * MINIMUM_PHASE_RADIUS) else None
 
     def zeros_at_bound(self, phi, share=0.99):
         """Blocks ('L1', 'L2') with a zero at |z| >= share * zero_radius:
@@ -287,14 +334,15 @@ class Problem:
     """
 
     def __init__(self, u, y, orders, *, i1=0, i2=0, sign=1, dt=True,
-                 name=None, offsets=False, inits=False):
+                 name=None, offsets=False, inits=False, minimum_phase=None):
         us = list(u) if isinstance(u, list) else [u]
         ys = list(y) if isinstance(y, list) else [y]
         self.orders = {k: orders[k] for k in ('na', 'nb', 'nc', 'nd', 'q1',
                                                'q2')}
         self.st = Parametrisation(tuple(self.orders.values()), i1, i2,
                                   n_offsets=len(us) if offsets else 0,
-                                  n_inits=len(us) if inits else 0)
+                                  n_inits=len(us) if inits else 0,
+                                  minimum_phase=minimum_phase)
         self.sign = 1 if sign >= 0 else -1
         self.su = _scale(np.concatenate(us))
         self.sy = _scale(np.concatenate(ys))
@@ -349,7 +397,8 @@ class Problem:
             zeros_at_bound=self.st.zeros_at_bound(phi) if stable else [],
             zero_radius=self.st.zero_radius, fit=fit, min_fit=min_fit,
             linear=linear, cost_scaled=out['cost'], std=std, theta=theta,
-            labels=labels)
+            labels=labels, minimum_phase_bound=self.st.minimum_phase_bound(
+                phi))
         res = IdentificationResult(
             model=self.model(phi), theta=theta, history=np.zeros((0,
                                                                   theta.size)),

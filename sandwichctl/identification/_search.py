@@ -20,12 +20,12 @@ say they will run (`Search.planned`).
 import numpy as np
 
 from ._lm import lm
-from ._linear import fit_oe, fit_output, wants_integrator
+from ._linear import fit_oe, fit_output, fit_blocks, wants_integrator
 from ._predictor import oe_signals
-from ._problem import Problem
+from ._problem import Problem, STABILITY_MARGIN
 from ._smooth import smooth_refine
 from ._starts import (splits, opened, random_start, recursive_start,
-                      relocations, perturb)
+                      relocations, perturb, unsplit, held_starts, holds)
 from .linear import oe_transfer_function
 from .._checks import progress_bar
 
@@ -72,7 +72,8 @@ class Task:
         i1, i2 = integrator_split(k, self.orders, self.opt.integrator_block)
         return Problem(self.u, self.y, self.orders, i1=i1, i2=i2, sign=sign,
                        dt=self.dt, name=self.name, offsets=self.offsets,
-                       inits=self.inits)
+                       inits=self.inits,
+                       minimum_phase=self.opt.minimum_phase)
 
     def fit_linear(self, scaled, k):
         """The linear output-error fit with k integrators on `scaled`."""
@@ -161,8 +162,8 @@ def _integrator_floor(fits, k):
     an integrating sandwich `k` = 1 is kept only if it is cheaper than the
     integrator-free linear fit it must beat (a search without an
     integrator that diverged or stalled is no evidence for one)."""
-    if k == 1 and 0 in fits and \
-            not fits[1][1]['cost'] < fits[0][2]['cost_scaled']:
+    if k == 1 and 0 in fits and not fits[1][1]['cost'] < fits[0][2].get(
+            'held', fits[0][2])['cost_scaled']:
         return 0
     return k
 
@@ -218,6 +219,7 @@ class Search:
             self.sign = -1 if lin['B'][0] < 0 else 1
             probs = {self.sign: task.problem(k, self.sign)}
         self.probs = probs
+        self.held = None
         self.heads = {}
         self._head_all()
         self.bar = None
@@ -230,7 +232,6 @@ class Search:
 
     def run(self):
         """Steps 4 to 12: (problem, best `lm` output, linear baseline)."""
-        linear = self.baseline()
         groups = self.step4_nested_starts()
         self.bar = progress_bar(self.task.progress, total=self.planned(
             groups), desc='identify: starts', leave=False)
@@ -244,7 +245,7 @@ class Search:
         self.bar.close()
         best = self.step12_never_worse_than_linear(best)
         best['n_starts'] = len(cands) + len(others)
-        return self.probs[best['sign']], best, linear
+        return self.probs[best['sign']], best, self.baseline()
 
     def planned(self, groups):
         """Progress-bar total: what steps 4 to 10 say they will run."""
@@ -253,20 +254,36 @@ class Search:
                 + opt.n_random + 1 + opt.keep + opt.relocate + 1 + opt.hops)
 
     def baseline(self):
-        """The linear fit in the user's units (``res.linear``)."""
-        lin, prob, k = self.lin, self.probs[self.sign], self.k
+        """The linear fit in the user's units (``res.linear``); with
+        ``'held'``, the best linear model the structure holds, when it
+        cannot hold the linear fit (`held_start`)."""
+        lin, k = self.lin, self.k
         nb_l, nf_l, nk_l = self.task.shape
+        out = dict(self._user_units(lin), cost_scaled=lin['cost'],
+                   n_params=nb_l + nf_l - k, integrators=k,
+                   converged=lin['converged'], message=lin['message'])
+        if self.held is not None:
+            held = self.held
+            out['held'] = dict(self._user_units(held),
+                               cost_scaled=held['cost'],
+                               roots=held['roots'])
+            out['held']['note'] = held_note(
+                self.task.orders, self.probs[self.sign].st, held['roots'],
+                out['held']['fit'])
+        return out
+
+    def _user_units(self, lin):
+        """fit, cost and transfer function in the user's units of a
+        linear model on the scaled data (``B``, ``F``, ``offsets``)."""
+        prob, nk_l = self.probs[self.sign], self.task.shape[2]
         y_all = np.concatenate(self.task.y)
         r_lin = y_all - prob.sy * fit_output(
             lin, [part / prob.su for part in prob.u_user], nk_l)
         denom = np.linalg.norm(y_all - y_all.mean())
-        return {
-            'fit': float(100 * (1 - np.linalg.norm(r_lin) / denom)),
-            'cost': 0.5 * float(r_lin @ r_lin), 'cost_scaled': lin['cost'],
-            'n_params': nb_l + nf_l - k, 'integrators': k,
-            'model': oe_transfer_function(lin['B'] * prob.sy / prob.su,
-                                          lin['F'], nk_l, self.task.dt),
-            'converged': lin['converged'], 'message': lin['message']}
+        return {'fit': float(100 * (1 - np.linalg.norm(r_lin) / denom)),
+                'cost': 0.5 * float(r_lin @ r_lin),
+                'model': oe_transfer_function(lin['B'] * prob.sy / prob.su,
+                                              lin['F'], nk_l, self.task.dt)}
 
     def extend(self, s, phi):
         """A model start of sign s with the linear fit's output offsets
@@ -305,6 +322,54 @@ class Search:
             groups = sorted(groups, key=self._widest_cost)
             groups = groups[:self.opt.max_splits]
         return groups
+
+    def held_start(self):
+        """Step 12 when the structure cannot hold the linear fit (its
+        roots cannot be split into L1 and L2 with complex pairs whole,
+        `_starts.unsplit`): the best linear model the structure holds, a
+        sandwich with a closed backlash fitted by output error
+        (`_linear.fit_blocks`) from real-root starts (`held_starts`). Its
+        phi, also kept in ``self.held`` (the floor of step 12 then); None
+        when the structure holds the linear fit."""
+        sign, prob = self.sign, self.probs[self.sign]
+        st, B, F = prob.st, sign * self.lin['B'], self.lin['F']
+        roots = unsplit(st, B, F)
+        if not roots:
+            return None
+        im, best = st.im, None
+        sizes = (st.nc_free, st.na_free, st.o[1], st.o[3])
+        for phi in held_starts(st, B, F):
+            fit = fit_blocks(prob.u, prob.y, np.delete(phi, [im + 1, im + 2,
+                                                             im + 3]),
+                             sizes, nk=st.o[4] + st.o[5],
+                             integrators=(st.i1, st.i2),
+                             offsets=bool(st.n_off),
+                             max_iter=self.opt.max_iter,
+                             radius=1 - STABILITY_MARGIN)
+            if best is None or fit['cost'] < best['cost']:
+                best = fit
+        x = best['x']
+        phi = self.extend(sign, np.insert(x, im + 1, [x[im], 0.0, 0.0]))
+        phi[st.q:st.q + st.n_off] = best['offsets'][:st.n_off]
+        phi = st.minimum_phase_start(phi)
+        cost = st.cost(phi, prob.u, prob.y)
+        if not (x[im] > 0 and np.isfinite(cost) and st.stable(phi)):
+            return None
+        self.held = dict(best, phi=phi, cost=cost, roots=roots,
+                         B=sign * best['B'], offsets=sign * best['offsets'])
+        return phi
+
+    def from_held(self, best, held):
+        """The search again from the `held` linear model (step 12): closed
+        and opened (step 4), each converged with step 7, the best polished
+        (steps 8 to 10); the cheaper of that and `best`."""
+        s, prob = self.sign, self.probs[self.sign]
+        self.tick = lambda: None              # not counted in the bar
+        outs = [self.step7_refit_l2(self.converge(s, phi)) for phi in
+                [held] + opened(prob.st, held, prob.u, self.opt.widths)]
+        found = self.polish(min(outs, key=lambda out: out['cost']))
+        ok = np.isfinite(best['cost']) and best['cost'] <= found['cost']
+        return best if ok else found
 
     def _widest_cost(self, group):
         s, phi = group[-1]
@@ -471,21 +536,67 @@ class Search:
     def step12_never_worse_than_linear(self, best):
         """Step 12: if no start ends below the linear fit, the model is the
         linear fit itself, as a sandwich with a closed backlash (the zero
-        radius lifted to hold its zeros)."""
+        radius lifted to hold its zeros). A structure that cannot hold the
+        linear fit is searched again from the best linear model it holds
+        (`held_start`, `from_held`), the floor then."""
         if best['cost'] <= self.lin['cost'] and np.isfinite(best['cost']):
             return best
+        held = self.held_start()
+        if held is not None:
+            best = self.from_held(best, held)
+            if best['cost'] <= self.held['cost']:
+                return best
         prob = self.probs[self.sign]
         st = prob.st
         st.zero_radius = np.inf
-        phi = self.extend(self.sign, splits(st, self.sign * self.lin['B'],
-                                            self.lin['F'])[0])
+        if self.held is None:
+            phi = self.extend(self.sign, splits(
+                st, self.sign * self.lin['B'], self.lin['F'])[0])
+            text = "the linear fit"
+        else:
+            phi = self.held['phi']
+            text = ("the best linear model this structure holds (it cannot "
+                    "hold the linear fit: res.linear['held'])")
         out = lm(st, phi, prob.u, prob.y, max_iter=1)
         out['sign'] = self.sign
         out['fallback'] = True
-        out['message'] = ("no sandwich start improved on the linear fit: "
-                          "the model is the linear fit with a closed "
-                          "backlash")
+        out['message'] = (f"no sandwich start improved on {text}: the model "
+                          f"is {text.split(' (')[0]} with a closed backlash")
+        if st.minimum_phase_start(phi) is not phi:
+            out['message'] += (", its zeros of L1 reflected inside the unit "
+                               "circle (minimum_phase='L1')")
         return out
+
+
+def held_note(orders, st, roots, fit):
+    """The sentence of the verdict when the structure cannot hold the
+    linear fit: which `roots` ({'poles': ..., 'zeros': ...}, `unsplit`)
+    cannot be split, the fit of the best linear model it holds, and the
+    least raised orders that hold them."""
+    names = {'poles': ('na', 'nc', st.na_free, orders['na'] - st.na_free),
+             'zeros': ('nb', 'nd', orders['nb'], 0)}
+    parts, raised = [], []
+    for kind, rs in roots.items():
+        first, second, k, fixed = names[kind]
+        pairs = [r for r in rs if r.imag > 1e-8 * max(1.0, abs(r))]
+        parts.append(f"its {kind} " + ', '.join(
+            f"{r.real:.3g}\u00b1{r.imag:.3g}j" for r in pairs))
+        for j in range(1, rs.size + 1):
+            padded = np.r_[rs, np.zeros(j)]
+            if holds(padded, k + j):
+                raised.append(f"{first} = {k + fixed + j}")
+                break
+            if holds(padded, k):
+                raised.append(f"{second} = {orders[second] + j}")
+                break
+    o = orders
+    return (f"the structure cannot hold the linear fit: {' and '.join(parts)}"
+            f" cannot be split into L1 (na = {o['na']}, nb = {o['nb']}) and "
+            f"L2 (nc = {o['nc']}, nd = {o['nd']}) with complex pairs whole; "
+            f"the search started from the best linear model it holds (fit "
+            f"{fit:.3g} %, res.linear['held']) and is never worse than it; "
+            f"a structure with {' and '.join(raised)} holds them (compare "
+            f"structures with sw.select_structure)")
 
 
 def refit_l2(st, phi, u, y, max_iter=100, tol=1e-10):

@@ -60,20 +60,35 @@ def _units(roots, tol=1e-8):
     return units
 
 
-def _as_reals(unit):
-    """Two real roots standing in for a conjugate pair (same centre)."""
+def _as_reals(unit, how='spread'):
+    """Two real roots standing in for a conjugate pair: its real part
+    plus and minus its imaginary part (``how='spread'``, same centre) or
+    a double root at its modulus (``'modulus'``, same magnitude, the
+    sign of its real part)."""
     r = unit[0]
+    if how == 'modulus':
+        return [np.array([np.copysign(abs(r), r.real) + 0j])] * 2
     return [np.array([r.real + abs(r.imag) + 0j]),
             np.array([r.real - abs(r.imag) + 0j])]
 
 
-def _choices(roots, k):
+def holds(roots, k):
+    """Whether k of the roots can go to one block and the rest to the
+    other with every complex pair kept whole."""
+    sizes = [u.size for u in _units(roots)]
+    sums = {0}
+    for size in sizes:
+        sums |= {s + size for s in sums}
+    return k in sums
+
+
+def _choices(roots, k, how='spread'):
     """All ways to take k of the roots for one block (pairs together).
 
     Returns a list of (chosen, rest) root arrays. When no selection of
     whole units has size k (e.g. one pole wanted, a complex pair
-    offered), a pair is replaced by two real roots at its real part plus
-    and minus its imaginary part, so that every structure gets starts.
+    offered), a pair is replaced by two real roots (`_as_reals`, `how`),
+    so that every structure gets starts.
     """
     units = _units(roots)
     n = sum(u.size for u in units)
@@ -93,7 +108,8 @@ def _choices(roots, k):
         if out:
             return out
         pair = next(i for i, u in enumerate(units) if u.size == 2)
-        units = units[:pair] + _as_reals(units[pair]) + units[pair + 1:]
+        units = units[:pair] + _as_reals(units[pair], how) + \
+            units[pair + 1:]
     return []
 
 
@@ -162,14 +178,44 @@ def _zero_variants(zeros, gain, radius):
     return variants
 
 
-def _assignments(st, zeros, gain, F):
+def _free_poles(st, F):
+    """The roots of F without its integrator factors."""
+    free = np.polydiv(F, integrator_poly(st.i1 + st.i2))[0]
+    return np.roots(free) if free.size > 1 else np.zeros(0)
+
+
+def unsplit(st, B, F):
+    """The roots of the linear fit B/F that the structure `st` cannot
+    split into L1 and L2 with complex pairs whole: {'poles': roots,
+    'zeros': roots}, a kind listed only when it cannot be split (empty:
+    the structure holds the linear fit)."""
+    zeros = np.roots(B) if B.size > 1 else np.zeros(0)
+    out = {}
+    for kind, roots, k in (('poles', _free_poles(st, F), st.na_free),
+                           ('zeros', zeros, st.o[1])):
+        if not holds(roots, k):
+            out[kind] = roots
+    return out
+
+
+def held_starts(st, B, F):
+    """Starts of the best linear model the structure holds, when it
+    cannot hold the linear fit B/F (`unsplit`): the first assignment
+    with each pair that does not fit broken into two real roots, either
+    spread about its real part or doubled at its modulus
+    (`_as_reals`); reduced vectors as `splits` gives."""
+    zeros = np.roots(B) if B.size > 1 else np.zeros(0)
+    out = []
+    for how in ('spread', 'modulus'):
+        out += _assignments(st, zeros, float(B[0]), F, how)[:1]
+    return out
+
+
+def _assignments(st, zeros, gain, F, how='spread'):
     """Starts for every assignment of poles and `zeros` to L1 and L2."""
     na, nb, nc, nd = st.o[:4]
-    # the free poles: F without its integrator factors
-    free = np.polydiv(F, integrator_poly(st.i1 + st.i2))[0]
-    poles = np.roots(free) if free.size > 1 else np.zeros(0)
-    pole_sets = _choices(poles, st.na_free)
-    zero_sets = _choices(zeros, nb)
+    pole_sets = _choices(_free_poles(st, F), st.na_free, how)
+    zero_sets = _choices(zeros, nb, how)
     # slowest poles in L1 first: a drive's L1 (motor loop) is usually the
     # slow block; the order only matters when the list is cut
     pole_sets.sort(key=lambda s: -np.sum(np.abs(s[0])))

@@ -19,6 +19,11 @@ the linear model that the sandwich nests:
    zero on the search bound is retried from the next converged start.
 5. Every accepted step lowers the cost, and the closed starts begin at the
    linear cost, so the sandwich never ends worse than the linear model.
+   A structure that cannot hold the linear fit (a complex pair for two
+   first-order blocks) starts from, and never ends worse than, the best
+   linear model it holds (``res.linear['held']``); it is still judged
+   against the linear fit, and the message says which roots could not
+   be split and which orders hold them.
    The verdict (``success``) checks stability, convergence, no zero on
    the search bound and that the model explains the data.
 
@@ -62,7 +67,8 @@ APPLIES = dict({'theta0': RECURSIVE, 'refine': RECURSIVE},
 def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
              method='oe', theta0=None, dt=True, refine=None, progress=False,
              integrators=None, integrator_block=None, name=None,
-             offsets='none', initial_state=None, **options):
+             offsets='none', initial_state=None, minimum_phase=None,
+             **options):
     r"""Identify a sandwich system from input/output data.
 
     Parameters
@@ -126,6 +132,16 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         model; they matter for short records and slow or integrating
         plants. ``res.initial_conditions`` gives them per experiment; the
         returned model's own `simulate` starts from rest.
+    minimum_phase : {None, False, 'L1'}, optional
+        ``'oe'`` only. ``'L1'``: L1's zeros are kept inside the unit
+        circle (``|z| < 0.999``), as for the motor and inner loop of a
+        drive, so that L1 can be inverted exactly (e.g. by a servo
+        controller's feedforward): every start has them reflected
+        inside (1 / conj(z), the same magnitude response) and every step
+        keeps them there. ``res.minimum_phase`` records it. Default
+        None (or False): no constraint, the search of before. The linear
+        baseline stays unconstrained, so a constrained model that fits
+        worse than it is not a success.
     **options
         The method's options (each method's defaults and checks are one
         frozen dataclass in ``_options``; an option or argument that does
@@ -149,7 +165,9 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         ``model`` (a `SandwichSystem` in the data's units, b0 = 1 and
         d0 = +-1), ``theta``, ``success`` and ``message``, ``fit``,
         ``cost`` and ``linear`` (the linear baseline; ``success`` needs a
-        fit at least the baseline's, whatever the method); for ``'oe'``
+        fit at least the baseline's, whatever the method; with ``'held'``,
+        the best linear model the structure holds when it cannot hold the
+        baseline, see the module documentation); for ``'oe'``
         and a refined recursive estimate also ``std``, and for ``'oe'``
         ``significance`` (F-test of the backlash), ``whiteness`` and
         ``integrators``. ``print(res)`` shows them at a glance.
@@ -186,6 +204,17 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     (True, True)
     >>> res.fit > res.linear['fit']
     True
+
+    A minimum-phase L1 (its zeros inside the unit circle):
+
+    >>> drive = sw.SandwichSystem.from_coefficients(
+    ...     a=[-0.7], b=[1.0, 0.5], c=[-0.5], d=[1.0], m1=1.0, m2=1.0,
+    ...     D1=0.1, D2=0.1, q1=1, q2=0)
+    >>> y = drive.simulate(u).outputs
+    >>> res = sw.identify(u, y, na=1, nb=1, nc=1, nd=0, q2=0,
+    ...                   minimum_phase='L1')
+    >>> res.minimum_phase, bool(max(abs(res.model.L1.zeros())) < 1)
+    ('L1', True)
     """
     if isinstance(y, numbers.Integral) and not isinstance(y, bool):
         raise TypeError("with a record or a list of experiments, give the "
@@ -200,7 +229,8 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     check_data_scale('u', us), check_data_scale('y', ys)
     opt = _method_options(method, options, offsets, dict(
         theta0=theta0, refine=refine, integrators=integrators,
-        integrator_block=integrator_block, initial_state=initial_state))
+        integrator_block=integrator_block, initial_state=initial_state,
+        minimum_phase=None if minimum_phase is False else minimum_phase))
     if name is not None and not isinstance(name, str):
         raise TypeError(f"name must be a string or None; got "
                         f"{type(name).__name__} {name!r}")
@@ -268,6 +298,7 @@ def _identify_oe(task):
     opt = task.opt
     return prob.result(best, 'oe', linear=linear, min_fit=opt.min_fit,
                        extra={'elapsed': time.perf_counter() - start,
+                              'minimum_phase': opt.minimum_phase,
                               'options': opt.search(),
                               'n_starts': best['n_starts'], 'theta0': None})
 

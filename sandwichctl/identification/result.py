@@ -44,7 +44,7 @@ class Failure(NamedTuple):
 def verdict(*, finite=None, stable=None, estimate=None, converged=None,
             zeros_at_bound=(), zero_radius=None, fit=None, min_fit=MIN_FIT,
             linear=None, cost_scaled=None, method='oe', std=None, theta=None,
-            labels=(), excitation=None):
+            labels=(), excitation=None, minimum_phase_bound=None):
     """The checks an identified model fails, in the order they are told.
 
     Every argument is one fact about the model; a fact left at None is
@@ -68,13 +68,17 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
         The linear baseline (``fit``, ``cost_scaled``); the model's cost on
         the same scaled data must not exceed its cost. A model of another
         method than ``'oe'`` that fails is told that 'oe' starts from the
-        baseline.
+        baseline. A baseline with ``'held'`` (the structure cannot hold
+        it) adds its note to the failure.
     std, theta, labels
         Standard errors: above `POORLY_DETERMINED` of |theta| a parameter
         is poorly determined (not fatal).
     excitation : float
         Share of the samples the backlash is outside its memory zone:
         below `MIN_EXCITATION` the data hardly excite it (not fatal).
+    minimum_phase_bound : float
+        With a minimum-phase L1, the bound a zero of L1 ended on (not
+        fatal: told in the message).
 
     Returns
     -------
@@ -111,7 +115,7 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
                            "" if method == 'oe' else
                            ": use method='oe', which starts from that "
                            "linear model (res.linear['model']) and is "
-                           "never worse"))
+                           "never worse") + _held(linear))
     if std is not None:
         ill = ~np.isfinite(std) | (std > POORLY_DETERMINED * np.maximum(
             np.abs(theta), 1e-3))
@@ -119,7 +123,21 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
             fail('std', [n for n, bad in zip(labels, ill) if bad], False)
     if excitation is not None and excitation < MIN_EXCITATION:
         fail('excitation', excitation, False)
+    if minimum_phase_bound is not None:
+        fail('minimum_phase', f"a zero of L1 ended on the minimum-phase "
+                              f"bound |z| = {minimum_phase_bound:.4g}: "
+                              f"these data ask for a zero outside the unit "
+                              f"circle (another delay q1, or "
+                              f"minimum_phase=None, may suit them)", False)
     return failed
+
+
+def _held(linear):
+    """'; ' and the note of a baseline whose structure cannot hold the
+    linear fit (``linear['held']``, see `_search.held_note`); '' when it
+    holds it."""
+    held = linear.get('held')
+    return "; " + held['note'] if held else ""
 
 
 def judge(res, failed):
@@ -137,6 +155,8 @@ def judge(res, failed):
                             f"(standard error > 50%): {f.text}")
             warn(f"{f.text} are poorly determined by the data (excitation "
                  f"too small or orders too high?)", IdentificationWarning)
+        elif f.check == 'minimum_phase':
+            res.message += f"; {f.text}"
         elif f.check == 'excitation':
             warn(f"the backlash of the identified model is outside its "
                  f"memory zone in only {f.text:.1%} of the samples: the "
@@ -287,6 +307,9 @@ class IdentificationResult(OptimizeResult):
         output-error baseline of the same total orders (a dict with
         ``fit``, ``cost``, ``model``, ``integrators``; for the recursive
         methods, which fit no integrators, fitted without).
+    minimum_phase
+        From ``identify(method='oe')``: the block kept minimum-phase
+        ('L1') or None.
     std, significance, whiteness, crossing
         Batch methods only: the parameters' standard errors, the
         backlash's F-test against the baseline (`backlash_significance`),
@@ -328,6 +351,9 @@ class IdentificationResult(OptimizeResult):
             lines.append(f"  residuals: {white['outside']} of "
                          f"{white['lags']} autocorrelation lags outside the "
                          f"99% band (Ljung-Box p = {white['p_value']:.2g})")
+        if getattr(self, 'minimum_phase', None):
+            lines.append(f"  {self.minimum_phase} kept minimum-phase (its "
+                         f"zeros inside the unit circle)")
         cross = getattr(self, 'crossing', None)
         if cross and cross['share'] >= CROSSING_NOTE:
             lines.append(

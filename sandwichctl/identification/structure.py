@@ -32,6 +32,7 @@ from html import escape
 
 import numpy as np
 
+from ._options import check_minimum_phase
 from .linear import identify_linear
 from .pipeline import identify
 from ..tools.experiments import _check_dt, as_experiments
@@ -96,13 +97,18 @@ class StructureTable:
         Whether the rows are ranked by the validation fit.
     elapsed : float
         Seconds for the whole search.
+    minimum_phase : {None, 'L1'}
+        The block the sandwiches keep minimum-phase (identify's
+        ``minimum_phase``).
     """
 
-    def __init__(self, rows, criterion, validated, elapsed):
+    def __init__(self, rows, criterion, validated, elapsed,
+                 minimum_phase=None):
         self.rows = rows
         self.criterion = criterion
         self.validated = validated
         self.elapsed = elapsed
+        self.minimum_phase = minimum_phase
 
     @property
     def best(self):
@@ -158,8 +164,10 @@ class StructureTable:
     def _title(self):
         how = ('validation fit (free run from rest)' if self.validated
                else f"{self.criterion.upper()} of the estimation residuals")
+        phase = self.minimum_phase
         return (f"StructureTable: {len(self.rows)} candidates ranked by "
-                f"{how}, in {self.elapsed:.1f} s")
+                f"{how}, in {self.elapsed:.1f} s" + (
+                    f" ({phase} minimum-phase)" if phase else ""))
 
     def _notes(self):
         notes = []
@@ -356,6 +364,8 @@ def select_structure(data, orders=None, delays=None, validation=None,
         ``method``, ``max_iter``); ``dt`` sets the sampling time of
         array data. ``integrators`` also applies to the linear rows.
         ``offsets`` may only be 'mean', which is what is done.
+        ``minimum_phase='L1'`` ranks sandwiches with a minimum-phase L1
+        (the linear rows stay unconstrained; the title says so).
 
     Returns
     -------
@@ -376,8 +386,9 @@ def select_structure(data, orders=None, delays=None, validation=None,
     ValueError
         If a grid is empty, has an entry of the wrong length or a
         negative or non-integer order or delay, or has more than
-        `MAX_ROWS` structures; if `criterion` is unknown or ``offsets`` is
-        not 'mean'; if the data are invalid (see `as_experiments`), or
+        `MAX_ROWS` structures; if `criterion` is unknown, ``offsets`` is
+        not 'mean' or ``minimum_phase`` is not None, False or 'L1'; if
+        the data are invalid (see `as_experiments`), or
         validation data are sampled at another dt.
     TypeError
         If a grid is not a list or a dict, if `identify_options` sets the
@@ -433,7 +444,8 @@ def select_structure(data, orders=None, delays=None, validation=None,
     _rank(rows, 'fit_validation' if val is not None else criterion,
           -1.0 if val is not None else 1.0)
     return StructureTable(rows, criterion, val is not None,
-                          time.perf_counter() - start)
+                          time.perf_counter() - start, check_minimum_phase(
+                              identify_options.get('minimum_phase')))
 
 
 def _check_arguments(criterion, include_linear, identify_options):
@@ -452,6 +464,7 @@ def _check_arguments(criterion, include_linear, identify_options):
                         f"options: the orders and delays come from the "
                         f"`orders` and `delays` grids, and `progress` is "
                         f"select_structure's own")
+    check_minimum_phase(identify_options.get('minimum_phase'))
     offsets = identify_options.get('offsets', 'mean')
     if offsets != 'mean':
         raise ValueError(
