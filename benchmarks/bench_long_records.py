@@ -18,6 +18,7 @@ private switch ``_long.LONG_RECORD``):
 
 Run: python benchmarks/bench_long_records.py [--seeds 3] [--repeat 3]
      [--old-repeat 1] [--random-seeds 0 1] [--n-random 100000]
+(``--old-repeat 0``: the long-record path alone.)
 """
 
 import argparse
@@ -85,15 +86,17 @@ def identify(u, y, orders):
 
 def measure(u, y, plant, repeat, **kw):
     """(median time, whole-record simulations, record lengths simulated,
-    result) of one path."""
-    with path(**kw):
-        counter = Counter(u.size)
-        with counter.counting():
-            res = identify(u, y, plant.orders)
-        t = median_time(lambda: identify(u, y, plant.orders),
+    result, parameter error) of one path, every run counted (the counts
+    are the same in each)."""
+    runs = []
+    counter = Counter(u.size)
+    with path(**kw), counter.counting():
+        t = median_time(lambda: runs.append(identify(u, y, plant.orders)),
                         repeat=repeat, warmup=0)
+    res = runs[-1]
     err = sw.parameter_error(res.theta, plant.theta)
-    return t, counter.full, counter.samples / u.size, res, err
+    return (t, counter.full // repeat, counter.samples / repeat / u.size,
+            res, err)
 
 
 def rows_of(label, u, y, plant, args, threshold=None):
@@ -101,6 +104,8 @@ def rows_of(label, u, y, plant, args, threshold=None):
     out = []
     for name, long, repeat in (('long-record', True, args.repeat),
                                ('exhaustive', False, args.old_repeat)):
+        if not repeat:
+            continue
         t, full, lengths, res, err = measure(
             u, y, plant, repeat, long=long, threshold=threshold)
         taken = res.long_record is not None
@@ -155,7 +160,8 @@ def main():
     print(f"Long records; {os.cpu_count()} cores; medians of repeated runs "
           f"(the exhaustive search once by default: it takes 20 s and more "
           f"per run)\n")
-    paper(args)
+    if args.seeds:
+        paper(args)
     if args.random_seeds:
         random_plants(args)
 

@@ -124,3 +124,17 @@ def _user_units(prob, phi):
         x, v, y = st.init(phi, e)
         out += [prob.su * x, prob.sy * v, prob.sign * prob.sy * y]
     return np.concatenate(out)
+
+
+def test_constant_leading_samples_search_the_whole_record(
+        monkeypatch, record):
+    """An input at rest over the leading samples cannot show the search
+    a basin: the whole record is searched, as below the threshold."""
+    plant, u, _ = record
+    u = np.r_[np.zeros(2500), u[2500:]]
+    y = plant.simulate(u).outputs
+    monkeypatch.setattr(_long, 'LONG_RECORD', 3000)
+    monkeypatch.setattr(_long, 'LONG_HEAD', 2000)
+    res = sw.identify(u, y, **plant.orders)
+    assert res.long_record is None and "long record" not in res.message
+    assert res.success

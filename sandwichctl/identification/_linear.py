@@ -200,7 +200,7 @@ def _start(v, y, nb, m, nk, offsets=False):
 
 
 def fit_oe(u, y, shape, integrators, *, max_iter=100, tol=1e-10,
-           offsets=False, start=None):
+           offsets=False):
     """Output-error fit on already scaled arrays (no checks, no scaling).
 
     Parameters
@@ -221,9 +221,6 @@ def fit_oe(u, y, shape, integrators, *, max_iter=100, tol=1e-10,
         Also fit a constant output offset per experiment. They enter
         linearly, so they are projected out (variable projection): each
         experiment's residual and Jacobian are centred.
-    start : tuple of ndarray, optional
-        (B, F'): a start of Levenberg-Marquardt (F' stable) instead of the
-        ARX and Steiglitz-McBride one, e.g. the fit of a part of the data.
 
     Returns
     -------
@@ -235,7 +232,7 @@ def fit_oe(u, y, shape, integrators, *, max_iter=100, tol=1e-10,
         ``nit``, ``converged`` and ``message``.
     """
     problem = _OutputError(u, y, shape, integrators, offsets)
-    return problem.result(problem.run(max_iter, tol, start))
+    return problem.result(problem.run(max_iter, tol))
 
 
 class _OutputError:
@@ -262,13 +259,11 @@ class _OutputError:
         return _normal(self.centre(_jacobian(b, fp, self.v, yhat, self.nk)),
                        self.centre(self.y - yhat))
 
-    def run(self, max_iter, tol, start=None):
-        """Levenberg-Marquardt from `start` (B, F') or the `_start`: a dict
-        of the final iterate, its normal equations and the verdict."""
+    def run(self, max_iter, tol):
+        """Levenberg-Marquardt from the `_start`: a dict of the final
+        iterate, its normal equations and the verdict."""
         nb = self.nb
-        b, fp = _start(self.v, self.ys, nb, self.m, self.nk, self.offsets) \
-            if start is None else (np.asarray(start[0], dtype=float),
-                                   np.asarray(start[1], dtype=float))
+        b, fp = _start(self.v, self.ys, nb, self.m, self.nk, self.offsets)
         s = dict(theta=np.concatenate([b, fp[1:]]), b=b, fp=fp)
         s['yhat'] = _simulate(b, fp, self.v, self.nk)
         s['cost'] = cost = self.cost_of(s['yhat'])

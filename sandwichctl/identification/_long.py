@@ -16,18 +16,20 @@ in two stages:
    its length, from its own start, so its initial conditions are the
    same);
 2. on all the samples: the linear baseline of the chosen integrator
-   count (its Levenberg-Marquardt started from the leading samples'
-   fit), Levenberg-Marquardt to convergence from the model of stage 1
-   (the same tolerance as the search's, ``tol``), and the
+   count (as the search on all of them fits it: a start from the
+   leading samples' fit can end in another local optimum),
+   Levenberg-Marquardt from the model of stage 1 until the cost's
+   decrease is below its statistical precision (`PRECISION`), and the
    never-worse-than-linear floor (step 12) against that baseline.
 
-The result says so in its message and in ``res.long_record``.
+The result says so in its message and in ``res.long_record``. The
+leading samples must excite the plant: when the input or output of an
+experiment is constant there, the whole record is searched as before.
 """
 
 import numpy as np
 
-from ._linear import fit_oe
-from ._problem import integrator_poly
+from ._lm import lm
 from ._search import Search, Task, _head, search, step1_units
 
 __all__ = []
@@ -37,8 +39,16 @@ __all__ = []
 #: models of shorter records are unchanged); at 200,000 samples that
 #: search takes a few seconds, the long-record path about two.
 LONG_RECORD = 200_000
-#: Leading samples the search of a long record runs on (stage 1).
+#: Leading samples the search of a long record runs on (stage 1): 25
+#: times the 2,000 it screens on by default, five times the longest record
+#: the search was tuned on.
 LONG_HEAD = 50_000
+#: The descent on all N samples (stage 2) stops when the relative decrease
+#: of the cost falls below PRECISION / N (or the tolerance ``tol``, if
+#: larger): near the optimum the cost of N samples grows by about k^2 / N
+#: of itself where the estimate is k standard errors away, so this is a
+#: move of a tenth of a standard error, below what the data resolve.
+PRECISION = 0.01
 
 
 def is_long(task):
@@ -52,9 +62,11 @@ def long_search(task):
     head = Task(_head(task.u, LONG_HEAD), _head(task.y, LONG_HEAD),
                 task.orders, task.opt, dt=task.dt, name=task.name,
                 progress=task.progress, offsets=task.offsets)
+    if not all(np.ptp(part) > 0 for part in head.u + head.y):
+        return search(task)       # a constant start: it cannot find a basin
     prob_h, best_h, linear_h = search(head)
     k = prob_h.st.i1 + prob_h.st.i2
-    full = Search(task, _linear_fit(task, k, linear_h['model']), k)
+    full = Search(task, task.fit_linear(step1_units(task), k), k)
     sign = best_h['sign']
     if sign not in full.probs:
         full.probs[sign] = task.problem(k, sign)
@@ -62,7 +74,9 @@ def long_search(task):
     prob.st.zero_radius = prob_h.st.zero_radius
     best = {'cost': np.inf}                 # step 12 on all: the fallback
     if not best_h.get('fallback'):
-        best = full.converge(sign, _carried(prob_h, prob, best_h['phi']))
+        tol = max(task.opt.tol, PRECISION / prob.n_samples)
+        best = dict(lm(prob.st, _carried(prob_h, prob, best_h['phi']),
+                       prob.u, prob.y, task.opt.max_iter, tol), sign=sign)
     best = full.step12_never_worse_than_linear(best)
     n, n_head = prob.n_samples, prob_h.n_samples
     best['n_starts'] = best_h['n_starts']
@@ -74,21 +88,6 @@ def long_search(task):
     _, auto, text = linear_h['message'].partition("; integrators=")
     linear['message'] += auto + text
     return full.probs[best['sign']], best, linear
-
-
-def _linear_fit(task, k, model):
-    """The linear output-error fit with k integrators on all the samples
-    (scaled as step 1 scales them), started from `model`, the leading
-    samples' fit in the user's units (``res.linear['model']``)."""
-    scaled = step1_units(task)
-    nb, nf, nk = task.shape
-    num, den = model.num[0][0], model.den[0][0]
-    num = np.r_[np.zeros(den.size - num.size), num]  # the leading zeros
-    B = num[nk:nk + nb] * scaled.su / scaled.sy
-    Ff = np.polydiv(den[:nf + 1], integrator_poly(k))[0]
-    return fit_oe(scaled.u, scaled.y, task.shape, k,
-                  max_iter=task.opt.max_iter, tol=task.opt.tol,
-                  offsets=task.offsets, start=(B, Ff))
 
 
 def _carried(prob_h, prob, phi_h):
