@@ -157,7 +157,8 @@ def main():
     ap.add_argument('--random-seeds', type=int, nargs='*', default=[0, 1])
     ap.add_argument('--n-random', type=int, default=100_000)
     args = ap.parse_args()
-    print(f"Long records; {os.cpu_count()} cores; medians of repeated runs "
+    print(f"Long records; {os.cpu_count()} cores, load average "
+          f"{os.getloadavg()[0]:.2f} at the start; medians of repeated runs "
           f"(the exhaustive search once by default: it takes 20 s and more "
           f"per run)\n")
     if args.seeds:

@@ -18,9 +18,9 @@ in two stages:
 2. on all the samples: the linear baseline of the chosen integrator
    count (as the search on all of them fits it: a start from the
    leading samples' fit can end in another local optimum),
-   Levenberg-Marquardt from the model of stage 1 until the cost's
-   decrease is below its statistical precision (`PRECISION`), and the
-   never-worse-than-linear floor (step 12) against that baseline.
+   Levenberg-Marquardt to convergence from the model of stage 1 (the
+   search's ``tol``), and the never-worse-than-linear floor (step 12)
+   against that baseline.
 
 The result says so in its message and in ``res.long_record``. The
 leading samples must excite the plant: when the input or output of an
@@ -29,7 +29,6 @@ experiment is constant there, the whole record is searched as before.
 
 import numpy as np
 
-from ._lm import lm
 from ._search import Search, Task, _head, search, step1_units
 
 __all__ = []
@@ -43,12 +42,6 @@ LONG_RECORD = 200_000
 #: times the 2,000 it screens on by default, five times the longest record
 #: the search was tuned on.
 LONG_HEAD = 50_000
-#: The descent on all N samples (stage 2) stops when the relative decrease
-#: of the cost falls below PRECISION / N (or the tolerance ``tol``, if
-#: larger): near the optimum the cost of N samples grows by about k^2 / N
-#: of itself where the estimate is k standard errors away, so this is a
-#: move of a tenth of a standard error, below what the data resolve.
-PRECISION = 0.01
 
 
 def is_long(task):
@@ -74,9 +67,7 @@ def long_search(task):
     prob.st.zero_radius = prob_h.st.zero_radius
     best = {'cost': np.inf}                 # step 12 on all: the fallback
     if not best_h.get('fallback'):
-        tol = max(task.opt.tol, PRECISION / prob.n_samples)
-        best = dict(lm(prob.st, _carried(prob_h, prob, best_h['phi']),
-                       prob.u, prob.y, task.opt.max_iter, tol), sign=sign)
+        best = full.converge(sign, _carried(prob_h, prob, best_h['phi']))
     best = full.step12_never_worse_than_linear(best)
     n, n_head = prob.n_samples, prob_h.n_samples
     best['n_starts'] = best_h['n_starts']
