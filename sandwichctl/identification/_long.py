@@ -35,8 +35,9 @@ __all__ = []
 
 #: Records of more samples than this take the long-record path. Below it
 #: the search runs on every sample as it always did (the identified
-#: models of shorter records are unchanged); at 200,000 samples that
-#: search takes a few seconds, the long-record path about two.
+#: models of shorter records are unchanged). On 200,000 samples of the
+#: paper's plant that search takes about 5 s, as long as the long-record
+#: path on a million (benchmarks/bench_identify_speed.py, table (b)).
 LONG_RECORD = 200_000
 #: Leading samples the search of a long record runs on (stage 1): 25
 #: times the 2,000 it screens on by default, five times the longest record
