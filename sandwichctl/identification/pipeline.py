@@ -27,6 +27,10 @@ the linear model that the sandwich nests:
    The verdict (``success``) checks stability, convergence, no zero on
    the search bound and that the model explains the data.
 
+A record of more than 200,000 samples is searched on its leading 50,000
+and refined on all of them (`_long`; ``res.long_record`` and the message
+say so).
+
 The search lives in `_search`, one function or method per step of
 ``docs/algorithm.md``; the options of each method in `_options`. The
 paper's recursive methods (``'bundle'``, ``'gradient'``) and the recursive
@@ -44,6 +48,7 @@ import warnings
 import numpy as np
 
 from ._data import prepare
+from ._long import is_long, long_search
 from ._options import OEOptions, RECURSIVE, method_options
 from ._predictor import padding, stable_and_finite
 from ._problem import Problem
@@ -294,13 +299,14 @@ def _check_length(orders, us):
 def _identify_oe(task):
     """The output-error search (`_search`) and its judged result."""
     start = time.perf_counter()
-    prob, best, linear = search(task)
+    prob, best, linear = (long_search if is_long(task) else search)(task)
     opt = task.opt
     return prob.result(best, 'oe', linear=linear, min_fit=opt.min_fit,
                        extra={'elapsed': time.perf_counter() - start,
                               'minimum_phase': opt.minimum_phase,
                               'options': opt.search(),
-                              'n_starts': best['n_starts'], 'theta0': None})
+                              'n_starts': best['n_starts'], 'theta0': None,
+                              'long_record': best.get('long_record')})
 
 
 def _identify_recursive(u, y, orders, method, kw):

@@ -316,6 +316,11 @@ class IdentificationResult(OptimizeResult):
         the residual whiteness summary (`whiteness`), and where the
         model's slope lines cross with the share of samples its x spends
         beyond (``{'x': ..., 'share': ...}``; printed from 10%).
+    long_record
+        From `identify` (``'oe'``): None, or for a record of more than
+        200,000 samples ``{'samples': ..., 'head': ...}``: the search ran
+        on the leading ``head`` samples and the final refinement on all of
+        them (the message says so too; docs/algorithm.md, long records).
     """
 
     def __init__(self, *args, **kwargs):

@@ -1,0 +1,97 @@
+"""Long records: the search on the leading samples, the refinement on all
+(private).
+
+A drive that logs at 1 to 10 kHz gives millions of samples in an hour.
+The search of `_search` (steps 1 to 12) refines several starts to
+convergence, polishes the best and hops around it, all on the whole
+record: about 25 s on a million samples of the paper's plant, and over a
+minute for larger orders. Its job is to find the basin of the best
+model, and a leading part of the record finds the same basin; only the
+last descent needs every sample, for the statistical precision of the
+estimate. So a record of more than `LONG_RECORD` samples is identified
+in two stages:
+
+1. the whole search (steps 1 to 12, the integrator decision included)
+   on the leading `LONG_HEAD` samples (each experiment in proportion to
+   its length, from its own start, so its initial conditions are the
+   same);
+2. on all the samples: the linear baseline of the chosen integrator
+   count (as the search on all of them fits it: a start from the
+   leading samples' fit can end in another local optimum),
+   Levenberg-Marquardt to convergence from the model of stage 1 (the
+   search's ``tol``), and the never-worse-than-linear floor (step 12)
+   against that baseline.
+
+The result says so in its message and in ``res.long_record``. The
+leading samples must excite the plant: when the input or output of an
+experiment is constant there, the whole record is searched as before.
+"""
+
+import numpy as np
+
+from ._search import Search, Task, _head, search, step1_units
+
+__all__ = []
+
+#: Records of more samples than this take the long-record path. Below it
+#: the search runs on every sample as it always did (the identified
+#: models of shorter records are unchanged). On 200,000 samples of the
+#: paper's plant that search takes about 5 s, as long as the long-record
+#: path on a million (benchmarks/bench_identify_speed.py, table (b)).
+LONG_RECORD = 200_000
+#: Leading samples the search of a long record runs on (stage 1): 25
+#: times the 2,000 it screens on by default, five times the longest record
+#: the search was tuned on.
+LONG_HEAD = 50_000
+
+
+def is_long(task):
+    """Whether `task` (a `_search.Task`) takes the long-record path."""
+    return sum(part.size for part in task.u) > LONG_RECORD
+
+
+def long_search(task):
+    """Stages 1 and 2 on `task`: (problem, best `lm` output, linear
+    baseline), as `_search.search` returns them, on all the samples."""
+    head = Task(_head(task.u, LONG_HEAD), _head(task.y, LONG_HEAD),
+                task.orders, task.opt, dt=task.dt, name=task.name,
+                progress=task.progress, offsets=task.offsets)
+    if not all(np.ptp(part) > 0 for part in head.u + head.y):
+        return search(task)       # a constant start: it cannot find a basin
+    prob_h, best_h, linear_h = search(head)
+    k = prob_h.st.i1 + prob_h.st.i2
+    full = Search(task, task.fit_linear(step1_units(task), k), k)
+    sign = best_h['sign']
+    if sign not in full.probs:
+        full.probs[sign] = task.problem(k, sign)
+    prob = full.probs[sign]
+    prob.st.zero_radius = prob_h.st.zero_radius
+    best = {'cost': np.inf}                 # step 12 on all: the fallback
+    if not best_h.get('fallback'):
+        best = full.converge(sign, _carried(prob_h, prob, best_h['phi']))
+    best = full.step12_never_worse_than_linear(best)
+    n, n_head = prob.n_samples, prob_h.n_samples
+    best['n_starts'] = best_h['n_starts']
+    best['long_record'] = {'samples': n, 'head': n_head}
+    best['message'] += (f"; long record: the search ran on the leading "
+                        f"{n_head:,} of {n:,} samples, the refinement on "
+                        f"all of them")
+    linear = full.baseline()
+    _, auto, text = linear_h['message'].partition("; integrators=")
+    linear['message'] += auto + text
+    return full.probs[best['sign']], best, linear
+
+
+def _carried(prob_h, prob, phi_h):
+    """phi_h of the problem `prob_h` (the leading samples) as the reduced
+    parameters of `prob` (all of them, scaled by their own spreads): the
+    model, output offsets and initial conditions in the user's units."""
+    st = prob.st
+    phi = st.phi(prob_h.st.theta(phi_h) * prob_h.unit / prob.unit)
+    ry, rx = prob_h.sy / prob.sy, prob_h.su / prob.su
+    phi[st.q:] = phi_h[st.q:] * ry
+    kx = st.init_sizes[0]
+    for e in range(st.n_inits):             # x in u's units, v and y in y's
+        at = st.q + st.n_off + e * st.n_init
+        phi[at:at + kx] = phi_h[at:at + kx] * rx
+    return phi

@@ -1,0 +1,140 @@
+"""The long-record path of `identify` (`identification._long`): the search
+on the leading samples, the refinement on all of them.
+
+The thresholds are lowered (monkeypatched) so that short records take the
+path; no timing is asserted (see benchmarks/bench_long_records.py)."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import sandwichctl as sw
+from sandwichctl.identification import _long, _predictor
+from sandwichctl.identification._problem import Problem
+
+N = 6000
+
+
+@pytest.fixture(scope='module')
+def record():
+    plant = sw.examples.paper_plant()
+    u = sw.examples.paper_input(N, seed=3)
+    y = sw.examples.add_noise(plant.simulate(u).outputs, 100, seed=1003)
+    return plant, u, y
+
+
+def _identify(monkeypatch, record, threshold, head=2000, **kw):
+    """identify on `record` with the long-record path above `threshold`
+    samples, counting the simulations of the whole record."""
+    plant, u, y = record
+    monkeypatch.setattr(_long, 'LONG_RECORD', threshold)
+    monkeypatch.setattr(_long, 'LONG_HEAD', head)
+    calls = []
+    for name in ('_output_padded', 'oe_simulate', 'sp_simulate'):
+        kernel = getattr(_predictor, name)
+
+        def counted(theta, o, up, *args, kernel=kernel):
+            calls.append(up.size - _predictor.padding(o))
+            return kernel(theta, o, up, *args)
+        monkeypatch.setattr(_predictor, name, counted)
+    res = sw.identify(u, y, **plant.orders, **kw)
+    monkeypatch.undo()
+    return res, sum(size >= N for size in calls)
+
+
+@pytest.fixture(scope='module')
+def both(record):
+    """(long-record result, its whole-record simulations), the same of
+    the exhaustive search."""
+    with pytest.MonkeyPatch.context() as mp:
+        long = _identify(mp, record, threshold=N // 2)
+    with pytest.MonkeyPatch.context() as mp:
+        exhaustive = _identify(mp, record, threshold=N)
+    return long, exhaustive
+
+
+def test_long_path_taken_above_threshold_and_said(both):
+    (res, _), (exh, _) = both
+    assert res.long_record == {'samples': N, 'head': 2000}
+    assert "long record: the search ran on the leading 2,000 of 6,000 " \
+           "samples" in res.message
+    assert res.success
+    assert exh.long_record is None and "long record" not in exh.message
+
+
+def test_long_path_simulates_the_record_fewer_times(both):
+    (_, n_long), (_, n_exh) = both
+    assert 0 < n_long <= n_exh / 5, (n_long, n_exh)
+
+
+def test_long_path_fits_as_the_exhaustive_search(both, record):
+    (res, _), (exh, _) = both
+    plant = record[0]
+    assert res.fit == pytest.approx(exh.fit, abs=0.01)          # points
+    err = sw.parameter_error(res.theta, plant.theta)
+    assert err <= 1.2 * sw.parameter_error(exh.theta, plant.theta) + 1e-4
+    assert res.fit >= res.linear['fit']
+    # the baseline is the linear fit of all the samples, as without it
+    assert res.linear['fit'] == pytest.approx(exh.linear['fit'], abs=1e-6)
+
+
+def test_long_path_with_experiments_offsets_and_initial_states(
+        monkeypatch, record):
+    plant, u, y = record
+    data = [(u[:3500], y[:3500] + 0.3), (u[3500:], y[3500:] - 0.2)]
+    monkeypatch.setattr(_long, 'LONG_RECORD', 3000)
+    monkeypatch.setattr(_long, 'LONG_HEAD', 2000)
+    with warnings.catch_warnings():  # the offsets blur D1, D2 (identify)
+        warnings.simplefilter('ignore', sw.IdentificationWarning)
+        res = sw.identify(data, **plant.orders, offsets='estimate',
+                          initial_state='estimate')
+    assert res.long_record['samples'] == N and res.success
+    np.testing.assert_allclose(res.offsets['y'], [0.3, -0.2], atol=0.05)
+
+
+def test_carried_keeps_model_offsets_and_initial_states(record):
+    """A phi of the leading samples' problem, carried to the whole
+    record's (scaled by other spreads), is the same model, offsets and
+    initial conditions in the user's units."""
+    plant, u, y = record
+    orders = plant.orders
+    parts = [(u[:4000], 3 * y[:4000]), (u[4000:], 3 * y[4000:])]
+    full = Problem([p[0] for p in parts], [p[1] for p in parts], orders,
+                   offsets=True, inits=True)
+    head = Problem([p[0][:300] for p in parts], [p[1][:300] for p in parts],
+                   orders, offsets=True, inits=True)
+    assert head.su != full.su and head.sy != full.sy
+    rng = np.random.default_rng(1)
+    phi_h = head.phi_of_model(plant)
+    phi_h[head.st.q:] = rng.standard_normal(head.st.size - head.st.q)
+    phi = _long._carried(head, full, phi_h)
+    np.testing.assert_allclose(full.model(phi).theta, head.model(
+        phi_h).theta, rtol=1e-12)
+    np.testing.assert_allclose(_user_units(full, phi),
+                               _user_units(head, phi_h), rtol=1e-12)
+
+
+def _user_units(prob, phi):
+    """Output offsets and initial conditions of phi in the user's units,
+    as `Problem.result` reports them."""
+    st = prob.st
+    out = [prob.sign * prob.sy * phi[st.q:st.q + st.n_off]]
+    for e in range(st.n_inits):
+        x, v, y = st.init(phi, e)
+        out += [prob.su * x, prob.sy * v, prob.sign * prob.sy * y]
+    return np.concatenate(out)
+
+
+def test_constant_leading_samples_search_the_whole_record(
+        monkeypatch, record):
+    """An input at rest over the leading samples cannot show the search
+    a basin: the whole record is searched, as below the threshold."""
+    plant, u, _ = record
+    u = np.r_[np.zeros(2500), u[2500:]]
+    y = plant.simulate(u).outputs
+    monkeypatch.setattr(_long, 'LONG_RECORD', 3000)
+    monkeypatch.setattr(_long, 'LONG_HEAD', 2000)
+    res = sw.identify(u, y, **plant.orders)
+    assert res.long_record is None and "long record" not in res.message
+    assert res.success
