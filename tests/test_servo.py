@@ -317,3 +317,24 @@ def test_a_far_zero_outside_does_not_block_the_sandwich_feedforward(
                                    linear=dict(model=lin, fit=90.0))
     ctrl = sw.servo_controller(result)
     assert f"feedforward inverts the {source}" in " ".join(ctrl.notes)
+
+
+def test_integrating_plants_that_differ_little_get_gains_that_differ_little(
+        monkeypatch):
+    """The PD of an integrating plant is refined on a fine grid: over a
+    sweep of one pole (0.5 to 0.7 in 0.01 steps) no neighbour's kd differs
+    by a coarse grid step (x1.78, which the coarse grid alone jumps by),
+    and the refined kp is never below the coarse one."""
+    from sandwichctl.design import _servo_design as sd
+    gains, coarse = [], []
+    for p in np.linspace(0.5, 0.7, 21):
+        P = ct.tf([0.02, 0.01], np.polymul([1, -1], [1, -p]), 1e-3)
+        ctrl = sw.servo_controller(P)
+        assert ctrl.margins['modulus'] >= 0.6 - 1e-9
+        gains.append((ctrl.kp, ctrl.kd))
+        with monkeypatch.context() as m:
+            m.setattr(sd, 'REFINE', 0)
+            coarse.append(sw.servo_controller(P).kp)
+    jumps = np.max(np.abs(np.diff(np.log(gains), axis=0)), axis=0)
+    assert jumps[1] < 0.4 < np.log(10 ** 0.25)
+    assert np.all(np.array(gains)[:, 0] >= np.array(coarse) - 1e-12)

@@ -155,6 +155,10 @@ def bandwidth(num, den, w):
 #: bandwidth (its -3 dB frequency, an integrator set aside)
 CROSSOVER_LIMIT = 1.0
 
+#: a PD found on the coarse grid is refined on a grid this many times
+#: finer around it
+REFINE = 8
+
 #: most the derivative may add to the controller's gain at the Nyquist
 #: frequency, relative to kp (sensor quantisation is amplified by it)
 DERIVATIVE_BOOST = 3.0
@@ -192,12 +196,13 @@ def design_pid(num, den, dt, modulus_margin):
     cross = np.nonzero(phase <= phase[0] - np.pi)[0]
     k0 = min(1.0 / np.abs(P[cross[0] if cross.size else -1]),
              1.0 / np.abs(P[np.searchsorted(w, wb)]))
-    cands, pds = [], []
-    for pole in (0.0, 0.5, 0.8):
+    integrating = np.any(np.abs(np.roots(den) - 1) < 1e-6)
+    I = z / (z - 1)
+
+    def grid(pole, kp, kd):
+        """PID candidates (ki, kp, kd, pole) with their largest ki, and
+        PD candidates (kp, kd, pole), on the grid kp x kd."""
         D = (1 - pole) * (z - 1) / (z - pole)
-        I = z / (z - 1)
-        kp = k0 * np.logspace(-4, 1, 60)
-        kd = k0 * np.r_[0.0, np.logspace(-4, 1, 21)]
         KP, KD = (g.ravel() for g in np.meshgrid(kp, kd))
         boost = KD * (1 - pole) * 2 / (1 + pole) <= DERIVATIVE_BOOST * KP
         KP, KD = KP[boost], KD[boost]
@@ -205,31 +210,60 @@ def design_pid(num, den, dt, modulus_margin):
         b = I[None, :] * P[None, :]
         ki = _ki_max(a, b, 1.005 * modulus_margin, high)
         keep = np.isfinite(ki) & (ki > 0)
-        cands += [(k, p_, d, pole) for k, p_, d in
-                  zip(ki[keep], KP[keep], KD[keep])]
         # PD candidates: ki = 0 meets both constraints
         pd = (np.all(np.abs(a) >= 1.005 * modulus_margin, axis=1)
               & np.all(np.abs(a[:, high] - 1) <= 1, axis=1))
-        pds += [(p_, d, pole) for p_, d in zip(KP[pd], KD[pd])]
-    integrating = np.any(np.abs(np.roots(den) - 1) < 1e-6)
+        return ([(k, p_, d, pole) for k, p_, d in
+                 zip(ki[keep], KP[keep], KD[keep])],
+                [(p_, d, pole) for p_, d in zip(KP[pd], KD[pd])])
+
+    def first(found, pd):
+        """The first candidate whose loop is stable and unconditionally
+        so, as (kp, ki, kd, pole); None if there is none."""
+        for c in found:
+            kp, ki, kd, pole = (c[0], 0.0, c[1], c[2]) if pd else \
+                (c[1], c[0], c[2], c[3])
+            C = pid_tf(kp, ki, kd, pole, dt)
+            if loop_radius(num, den, C) < 1 and \
+                    _unconditional(num, den, C, w):
+                return kp, ki, kd, pole
+        return None
+
+    kp_grid = k0 * np.logspace(-4, 1, 60)
+    kd_grid = k0 * np.r_[0.0, np.logspace(-4, 1, 21)]
+    cands, pds = [], []
+    for pole in (0.0, 0.5, 0.8):
+        c, d = grid(pole, kp_grid, kd_grid)
+        cands += c
+        pds += d
     if integrating:
         # no integral action on an integrating plant: with play, a type-2
         # loop has no rest point and limit-cycles (the drive's own speed
-        # loop integrates load torques away)
+        # loop integrates load torques away); the largest kp of a PD
         cands = []
-    cands.sort(key=lambda c: -c[0])
-    for ki, kp, kd, pole in cands:
-        C = pid_tf(kp, ki, kd, pole, dt)
-        if loop_radius(num, den, C) < 1 and _unconditional(num, den, C, w):
-            return sign * kp, sign * ki, sign * kd, pole
-    if integrating:
-        # the largest kp of a PD that meets the constraints
-        pds.sort(key=lambda c: -c[0])
-        for kp, kd, pole in pds:
-            C = pid_tf(kp, 0.0, kd, pole, dt)
-            if loop_radius(num, den, C) < 1 and \
-                    _unconditional(num, den, C, w):
-                return sign * kp, 0.0, sign * kd, pole
+    pd = not cands and integrating
+    found = sorted(pds, key=lambda c: -c[0]) if pd else \
+        sorted(cands, key=lambda c: -c[0])
+    best = first(found, pd)
+    if best is not None and pd:
+        # refine the PD around it on a grid REFINE times finer, so that
+        # models that fit alike get alike gains, not the next points of a
+        # coarse grid (a PID is not: a larger ki than the coarse grid's
+        # made the position drives of benchmarks/bench_servo.py ring
+        # longer in their holds)
+        kp, _, kd, pole = best
+        fine = np.linspace(-1.0, 1.0, 2 * REFINE + 1)
+        kps = kp * (kp_grid[1] / kp_grid[0]) ** fine
+        kds = (kd * (kd_grid[2] / kd_grid[1]) ** fine if kd > 0
+               else np.r_[0.0, kd_grid[1] * (kd_grid[2] / kd_grid[1])
+                          ** (fine[REFINE:] - 1)])
+        refined = first(sorted(grid(pole, kps, kds)[1], key=lambda c: -c[0]),
+                        True)
+        if refined is not None and refined[0] > best[0]:
+            best = refined
+    if best is not None:
+        kp, ki, kd, pole = best
+        return sign * kp, sign * ki, sign * kd, pole
     raise ValueError(
         f"no PID gains meet modulus_margin={modulus_margin} with a "
         f"stable loop for this plant (poles {_fmt_roots(np.roots(den))},"
