@@ -94,11 +94,6 @@ def cases(seeds, randoms, loops, seed0=0, random0=0):
                d['params'], 100 + seed)
 
 
-def scaled(ctrl_lin, factor):
-    """The linear design with its feedback gains scaled (for the sweep)."""
-    return sw.servo_controller(ctrl_lin.model, feedback_scale=factor)
-
-
 def to_margin(ctrl, target=0.6, most=4.0):
     """The largest factor (at most `most`) on the design's PID gains that
     keeps the model's modulus margin at `target` (servo_controller's

@@ -116,11 +116,6 @@ def _params(params):
             f"unknown servo-drive parameter(s) {unknown}; valid names are "
             f"{sorted(DRIVE_PARAMETERS)} (see DRIVE_PARAMETERS)")
     out = {}
-    law = params.get('contact', 1.0)
-    if isinstance(law, (int, float, np.floating, np.integer)) and \
-            not isinstance(law, bool) and not 1.0 <= law <= 3.0:
-        raise ValueError(f"contact [1] must be in [1, 3] (1: linear, 1.5: "
-                         f"Hertzian); got {law!r}")
     for key, (value, unit, _) in DRIVE_PARAMETERS.items():
         value = params.get(key, value)
         label = f"{key} [{unit}]"
@@ -130,6 +125,9 @@ def _params(params):
             out[key] = check_nonnegative(label, value)
         else:
             out[key] = check_positive(label, value)
+    if not 1.0 <= out['contact'] <= 3.0:
+        raise ValueError(f"contact [1] must be in [1, 3] (1: linear, 1.5: "
+                         f"Hertzian); got {out['contact']!r}")
     return out
 
 

@@ -58,6 +58,16 @@ def frequency_grid(den, n=1500):
     return np.logspace(np.log10(max(low, 1e-9)), np.log10(np.pi), n)
 
 
+def series_length(zj):
+    """Samples of preview the anticausal series of :math:`1/(z - z_j)`
+    needs, its terms :math:`|z_j|^{-i}` cut below `SERIES_TOL`; inf for a
+    zero on the unit circle or a ringing one (real part below `RINGING`),
+    which only keep their DC gain."""
+    if abs(zj) > 1 + 1e-6 and np.real(zj) >= RINGING:
+        return int(np.ceil(np.log(SERIES_TOL) / -np.log(abs(zj))))
+    return np.inf
+
+
 def preview_inverse(num, den, kind='preview', max_preview=20):
     """Numerator, denominator (descending powers of z) and delay d of the
     preview inverse of num/den; also the zeros handled approximately."""
@@ -74,9 +84,7 @@ def preview_inverse(num, den, kind='preview', max_preview=20):
         q = poly_u[::-1] / np.polyval(poly_u, 1.0) ** 2
     elif nu.size:
         for zj in nu:
-            count = (int(np.ceil(np.log(SERIES_TOL) / -np.log(abs(zj))))
-                     if abs(zj) > 1 + 1e-6 and np.real(zj) >= RINGING
-                     else max_preview + 1)
+            count = series_length(zj)
             if count > max_preview:
                 dc_only.append(zj)
                 stable_part = stable_part * (1.0 - zj)
@@ -196,12 +204,12 @@ def design_pid(num, den, dt, modulus_margin):
     cross = np.nonzero(phase <= phase[0] - np.pi)[0]
     k0 = min(1.0 / np.abs(P[cross[0] if cross.size else -1]),
              1.0 / np.abs(P[np.searchsorted(w, wb)]))
-    integrating = np.any(np.abs(np.roots(den) - 1) < 1e-6)
     I = z / (z - 1)
 
     def grid(pole, kp, kd):
-        """PID candidates (ki, kp, kd, pole) with their largest ki, and
-        PD candidates (kp, kd, pole), on the grid kp x kd."""
+        """Candidates (kp, ki, kd, pole) on the grid kp x kd: the PIDs
+        with their largest ki, and the PDs (ki = 0) that meet both
+        constraints."""
         D = (1 - pole) * (z - 1) / (z - pole)
         KP, KD = (g.ravel() for g in np.meshgrid(kp, kd))
         boost = KD * (1 - pole) * 2 / (1 + pole) <= DERIVATIVE_BOOST * KP
@@ -210,42 +218,34 @@ def design_pid(num, den, dt, modulus_margin):
         b = I[None, :] * P[None, :]
         ki = _ki_max(a, b, 1.005 * modulus_margin, high)
         keep = np.isfinite(ki) & (ki > 0)
-        # PD candidates: ki = 0 meets both constraints
         pd = (np.all(np.abs(a) >= 1.005 * modulus_margin, axis=1)
               & np.all(np.abs(a[:, high] - 1) <= 1, axis=1))
-        return ([(k, p_, d, pole) for k, p_, d in
-                 zip(ki[keep], KP[keep], KD[keep])],
-                [(p_, d, pole) for p_, d in zip(KP[pd], KD[pd])])
+        return ([(p_, k, d, pole) for p_, k, d in
+                 zip(KP[keep], ki[keep], KD[keep])],
+                [(p_, 0.0, d, pole) for p_, d in zip(KP[pd], KD[pd])])
 
-    def first(found, pd):
-        """The first candidate whose loop is stable and unconditionally
-        so, as (kp, ki, kd, pole); None if there is none."""
-        for c in found:
-            kp, ki, kd, pole = (c[0], 0.0, c[1], c[2]) if pd else \
-                (c[1], c[0], c[2], c[3])
+    def first(found):
+        """The first candidate whose loop is stable, and unconditionally
+        so; None if there is none."""
+        for kp, ki, kd, pole in found:
             C = pid_tf(kp, ki, kd, pole, dt)
             if loop_radius(num, den, C) < 1 and \
                     _unconditional(num, den, C, w):
                 return kp, ki, kd, pole
         return None
 
+    # no integral action on an integrating plant: with play, a type-2 loop
+    # has no rest point and limit-cycles (the drive's own speed loop
+    # integrates load torques away); it gets the PD with the largest kp,
+    # any other plant the PID with the largest ki
+    integrating = np.any(np.abs(np.roots(den) - 1) < 1e-6)
+    which, score = (1, 0) if integrating else (0, 1)
     kp_grid = k0 * np.logspace(-4, 1, 60)
     kd_grid = k0 * np.r_[0.0, np.logspace(-4, 1, 21)]
-    cands, pds = [], []
-    for pole in (0.0, 0.5, 0.8):
-        c, d = grid(pole, kp_grid, kd_grid)
-        cands += c
-        pds += d
-    if integrating:
-        # no integral action on an integrating plant: with play, a type-2
-        # loop has no rest point and limit-cycles (the drive's own speed
-        # loop integrates load torques away); the largest kp of a PD
-        cands = []
-    pd = not cands and integrating
-    found = sorted(pds, key=lambda c: -c[0]) if pd else \
-        sorted(cands, key=lambda c: -c[0])
-    best = first(found, pd)
-    if best is not None and pd:
+    found = [c for pole in (0.0, 0.5, 0.8)
+             for c in grid(pole, kp_grid, kd_grid)[which]]
+    best = first(sorted(found, key=lambda c: -c[score]))
+    if best is not None and integrating:
         # refine the PD around it on a grid REFINE times finer, so that
         # models that fit alike get alike gains, not the next points of a
         # coarse grid (a PID is not: a larger ki than the coarse grid's
@@ -257,8 +257,7 @@ def design_pid(num, den, dt, modulus_margin):
         kds = (kd * (kd_grid[2] / kd_grid[1]) ** fine if kd > 0
                else np.r_[0.0, kd_grid[1] * (kd_grid[2] / kd_grid[1])
                           ** (fine[REFINE:] - 1)])
-        refined = first(sorted(grid(pole, kps, kds)[1], key=lambda c: -c[0]),
-                        True)
+        refined = first(sorted(grid(pole, kps, kds)[1], key=lambda c: -c[0]))
         if refined is not None and refined[0] > best[0]:
             best = refined
     if best is not None:
@@ -271,11 +270,17 @@ def design_pid(num, den, dt, modulus_margin):
         f"); lower modulus_margin or check the model")
 
 
+def loop_gain(num, den, C, w):
+    """The loop :math:`L = C P` at the frequencies w (rad/sample), for the
+    plant num/den and the transfer function C."""
+    z = np.exp(1j * w)
+    return (np.polyval(num, z) / np.polyval(den, z)
+            * np.polyval(C.num[0][0], z) / np.polyval(C.den[0][0], z))
+
+
 def _unconditional(num, den, C, w):
     """True if the loop C P never crosses -180 deg with |L| > 1."""
-    z = np.exp(1j * w)
-    L = (np.polyval(num, z) / np.polyval(den, z)
-         * np.polyval(C.num[0][0], z) / np.polyval(C.den[0][0], z))
+    L = loop_gain(num, den, C, w)
     turn = (np.diff(np.sign(L.imag)) != 0) & (L.real[1:] < -1)
     return not np.any(turn)
 
@@ -292,9 +297,7 @@ def crossover(num, den, C):
     """Frequency (rad/sample) where the loop gain :math:`|C P|` first
     falls below 1 on the log grid (pi if it never does)."""
     w = frequency_grid(den)
-    z = np.exp(1j * w)
-    L = (np.polyval(num, z) / np.polyval(den, z)
-         * np.polyval(C.num[0][0], z) / np.polyval(C.den[0][0], z))
+    L = loop_gain(num, den, C, w)
     below = np.flatnonzero(np.abs(L) < 1)
     return float(w[below[0]]) if below.size else float(np.pi)
 
@@ -303,9 +306,7 @@ def loop_margins(num, den, C):
     """(modulus margin, gain margin, phase margin [deg], closed-loop pole
     radius) of the loop C P, read on the log frequency grid."""
     w = frequency_grid(den, 6000)
-    z = np.exp(1j * w)
-    L = (np.polyval(num, z) / np.polyval(den, z)
-         * np.polyval(C.num[0][0], z) / np.polyval(C.den[0][0], z))
+    L = loop_gain(num, den, C, w)
     mm = float(np.min(np.abs(1 + L)))
     mag, ang = np.abs(L), np.angle(L)
     cross = np.flatnonzero(np.diff(np.sign(mag - 1)) != 0)

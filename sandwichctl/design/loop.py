@@ -14,6 +14,8 @@
 `ServoController`.
 """
 
+import math
+
 import numba
 import numpy as np
 import control as ct
@@ -104,7 +106,7 @@ def servo_loop(plant, r, ctrl):
         plant.reset()
     yk = float(plant.read()) if hasattr(plant, 'read') else 0.0
     for k in range(n):
-        if not np.isfinite(yk):
+        if not math.isfinite(yk):
             raise ValueError(
                 f"the plant returned y = {yk!r} at sample {k} "
                 f"({'read' if k == 0 else 'step'}); the loop stops there")

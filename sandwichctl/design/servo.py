@@ -261,12 +261,6 @@ def _rebuild(design, name, state, operating_point):
     return ctrl
 
 
-def _far(max_preview):
-    """Modulus beyond which a zero's anticausal series needs at most
-    `max_preview` samples (its inverse is then exact enough)."""
-    return sd.SERIES_TOL ** (-1.0 / max(max_preview, 1))
-
-
 def _feedforward_source(choice, result, lin_model, integrating, zeros,
                         max_preview):
     """Whether the feedforward inverts the sandwich's own mbar L1 L2
@@ -282,11 +276,12 @@ def _feedforward_source(choice, result, lin_model, integrating, zeros,
         return True, "linear part designed on the model's mbar L1 L2"
     gap = result.fit - result.linear['fit']
     if choice == 'auto':
-        # zeros outside the unit circle that the preview inverse cannot
-        # just keep by their DC gain (sampling zeros on the negative real
-        # axis it can)
-        outside = ((np.abs(zeros) >= 1) & (np.real(zeros) >= sd.RINGING)
-                   & (np.abs(zeros) < _far(max_preview)))
+        # zeros outside the unit circle that the preview inverse can only
+        # keep by their DC gain (sampling zeros on the negative real axis
+        # it may keep so)
+        outside = np.array([abs(zj) >= 1 and np.real(zj) >= sd.RINGING
+                            and sd.series_length(zj) > max_preview
+                            for zj in zeros], bool)
         use = not integrating and gap >= MODEL_FF_GAP and not outside.any()
         why = (f"the sandwich fits {gap:.1f} points better than the "
                f"baseline (" + ("at least " if gap >= MODEL_FF_GAP
@@ -470,11 +465,12 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                      and isinstance(getattr(result, 'linear', None), dict)
                      else None)
         integrating = bool(np.any(np.abs(np.roots(L1d) - 1) < 1e-6))
-        baseline_note = None
+        baseline_note = pid = None
         if isinstance(lin_model, ct.TransferFunction):
             try:
-                sd.design_pid(*_check_plant_tf('the baseline', lin_model),
-                              lin_model.dt, mm)
+                pid = sd.design_pid(*_check_plant_tf('the baseline',
+                                                     lin_model),
+                                    lin_model.dt, mm)
             except ValueError as exc:
                 # the sandwich is what identify vouched for: design on it
                 lin_model = None
@@ -489,11 +485,13 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         if baseline_note:
             linear_note = baseline_note + linear_note
     else:
-        _check_plant_tf('model', model)
-        P, linear_note = model, None
-    num, den = _check_plant_tf('the design plant', P)
+        P, linear_note, pid = model, None, None
+    num, den = _check_plant_tf('model' if P is model else 'the design plant',
+                               P)
     dt = P.dt
-    kp, ki, kd, pole = sd.design_pid(num, den, dt, mm)
+    # the baseline's gains were designed when it was checked
+    kp, ki, kd, pole = pid if pid is not None else sd.design_pid(
+        num, den, dt, mm)
     scale = check_positive('feedback_scale', feedback_scale)
     kp, ki, kd = scale * kp, scale * ki, scale * kd
     C = sd.pid_tf(kp, ki, kd, pole, dt)
