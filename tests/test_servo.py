@@ -9,6 +9,7 @@ import control as ct
 import pytest
 
 import sandwichctl as sw
+from sandwichctl.design import _servo_design as sd
 
 #: the issue's position-axis OE model, on which tracking_controller
 #: returned an unstable loop (pole radius 1.024) without raising
@@ -46,6 +47,21 @@ def test_axis_design_is_stable_and_meets_the_margin(mm):
     assert ctrl.margins['pole_radius'] < 1
     assert ctrl.margins["modulus"] >= mm * (1 - 1e-3)
     assert np.all(np.abs(ct.feedback(ctrl.pid * AXIS).poles()) < 1)
+
+
+@pytest.mark.parametrize('seed', range(6))
+def test_pid_never_amplifies_the_reference(seed):
+    # |T| <= 1 on the design grid, for the axis and random stable plants
+    rng = np.random.default_rng(seed)
+    poles = rng.uniform(0.3, 0.97, 3)
+    P = AXIS if seed == 0 else ct.tf([0.1, 0.05 * rng.uniform(-1, 1)],
+                                    np.poly(poles), 1e-3)
+    ctrl = sw.servo_controller(P)
+    w = sd.frequency_grid(P.den[0][0])
+    L = sd.loop_gain(np.trim_zeros(P.num[0][0], 'f'), P.den[0][0],
+                     ctrl.pid, w)
+    assert ctrl.ki > 0
+    assert np.max(np.abs(L / (1 + L))) <= 1 + 1e-9
 
 
 def test_tracking_controller_raises_instead_of_an_unstable_loop():
@@ -171,12 +187,13 @@ def test_stepwise_drive_refuses_bad_input_and_overrun():
         drive.apply(0.0)
 
 
-def test_servo_loop_on_the_drive_holds_without_hunting():
-    case = sw.data.drive_case(0, 'position', 200e-6, n=3000)
+@pytest.mark.parametrize('play', [0.0, 200e-6])
+def test_servo_loop_on_the_drive_holds_without_hunting(play):
+    case = sw.data.drive_case(0, 'position', play, n=3000)
     lin = sw.identify_linear(case.u, case.y, nb=2, nf=2, nk=1, dt=case.dt)
     ctrl = sw.servo_controller(lin)
     r = sw.servo_reference(case.dt, 1e-3)[:3000]
-    drive = sw.data.ServoDrive('position', 200e-6, seed=1, n=r.size)
+    drive = sw.data.ServoDrive('position', play, seed=1, n=r.size)
     out = sw.closed_loop_response(drive, r, ctrl)
     m = sw.servo_metrics(r, *out.outputs, case.dt, deadband=1.5e-6)
     assert m['rms'] < 1e-4 and m['hunting'] < 3

@@ -355,8 +355,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
 
     The feedback is a PID on the model's linear part (a `SandwichSystem`'s
     :math:`\bar m L_1 L_2`), with the largest integral gain that keeps the
-    modulus margin on a log frequency grid reaching below the slowest
-    pole, integrating plants included; the loop's poles are checked, so an
+    modulus margin and a complementary sensitivity :math:`|T| \le 1` on a
+    log frequency grid reaching below the slowest pole (an integrating
+    plant gets a PD, see the module notes); the loop's poles are checked, so an
     unstable design is never returned. The feedforward inverts the model
     along the reference with ``preview`` samples of preview; for a
     sandwich it contains the backlash inverse (see the module notes).
@@ -500,8 +501,10 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         raise ValueError(f"the feedback scaled by {scale:g} gives an "
                          f"unstable loop (pole radius {radius:.4f}); use a "
                          f"smaller feedback_scale")
-    notes.append(f"PID with the largest integral gain at modulus margin "
-                 f"{mm:g} (got {mmod:.3f} on a log grid from "
+    notes.append(f"{'PD' if ki == 0 else 'PID'} with the largest "
+                 f"{'proportional' if ki == 0 else 'integral'} gain at "
+                 f"modulus margin {mm:g}{'' if ki == 0 else ' and |T| <= 1'}"
+                 f" (got {mmod:.3f} on a log grid from "
                  f"{sd.frequency_grid(den)[0]:.1e} rad/sample)")
     design = dict(model=model, dt=dt, kp=float(kp), ki=float(ki),
                   kd=float(kd), derivative_pole=float(pole),
