@@ -15,7 +15,7 @@ from sandwichctl.identification._search import Search, Task, refit_l2
 def _search(prob):
     """A `Search` over the problem `prob` alone (default options)."""
     task = Task(prob.u_user, prob.y_user, prob.orders, OEOptions())
-    return Search(task, None, 0, probs={prob.sign: prob})
+    return Search(task, None, (0, 0), probs={prob.sign: prob})
 
 
 def _perturbed_l2(st, phi, rng):
@@ -212,10 +212,12 @@ def test_an_integrator_must_beat_the_integrator_free_linear_fit():
     for an integrator."""
     from sandwichctl.identification._search import _integrator_floor
 
-    def fits(cost1, linear0):
-        return {0: (None, {'cost': np.inf}, {'cost_scaled': linear0}),
-                1: (None, {'cost': cost1}, {'cost_scaled': 5.0})}
-    assert _integrator_floor(fits(2.0, 3.0), 1) == 1     # beats it
-    assert _integrator_floor(fits(4.0, 3.0), 1) == 0     # worse: floor
-    assert _integrator_floor(fits(4.0, 3.0), 0) == 0
-    assert _integrator_floor({1: (None, {'cost': 9.0}, {})}, 1) == 1
+    def fits(cost1, linear0, block=(1, 0)):
+        return {(0, 0): (None, {'cost': np.inf}, {'cost_scaled': linear0}),
+                block: (None, {'cost': cost1}, {'cost_scaled': 5.0})}
+    for one in ((1, 0), (0, 1)):                         # L1 or L2
+        assert _integrator_floor(fits(2.0, 3.0, one), one) == one
+        assert _integrator_floor(fits(4.0, 3.0, one), one) == (0, 0)
+        assert _integrator_floor(fits(4.0, 3.0, one), (0, 0)) == (0, 0)
+        assert _integrator_floor({one: (None, {'cost': 9.0}, {})},
+                                 one) == one

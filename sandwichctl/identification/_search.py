@@ -9,7 +9,8 @@ or method here, in that order and with that number:
   them; `linear_baseline` runs steps 1 and 2 alone, the baseline the
   recursive methods are judged against);
 - `Search.step4_nested_starts` to `Search.step12_never_worse_than_linear`:
-  the search of one integrator count from its linear fit.
+  the search with the integrators in given blocks from the linear fit
+  of their count (step 3 runs it for each, and chooses).
 
 The starts come from `_starts`, the solver is `_lm.lm`, the problem and
 its verdict from `_problem`. A new start is one function in `_starts` and
@@ -67,9 +68,10 @@ class Task:
         self.shape = (o['nb'] + o['nd'] + 1, o['na'] + o['nc'],
                       o['q1'] + o['q2'])
 
-    def problem(self, k, sign):
-        """The scaled problem with k integrators and gain sign `sign`."""
-        i1, i2 = integrator_split(k, self.orders, self.opt.integrator_block)
+    def problem(self, split, sign):
+        """The scaled problem with the integrators `split` = (i1, i2) in L1
+        and L2 and gain sign `sign`."""
+        i1, i2 = split
         return Problem(self.u, self.y, self.orders, i1=i1, i2=i2, sign=sign,
                        dt=self.dt, name=self.name, offsets=self.offsets,
                        inits=self.inits,
@@ -93,6 +95,25 @@ def integrator_split(k, orders, block):
     i_first = min(k, first)
     i_second = k - i_first
     return (i_first, i_second) if block == 'L1' else (i_second, i_first)
+
+
+def integrator_splits(k, orders, block):
+    """The (i1, i2) the search tries for k integrators: the one of
+    `integrator_split` for a `block` 'L1' or 'L2'; for 'auto' every way
+    of placing them in blocks with poles enough (na for L1, nc for L2),
+    L1's fullest first."""
+    if block != 'auto' or k == 0:
+        return [integrator_split(k, orders, 'L1' if block == 'auto'
+                                 else block)]
+    na, nc = orders['na'], orders['nc']
+    return [(i1, k - i1) for i1 in range(min(k, na), -1, -1)
+            if k - i1 <= nc]
+
+
+def split_label(split):
+    """'1 in L1', '1 in L2', '1 in L1 + 1 in L2' or '0' for (i1, i2)."""
+    parts = [f"{i} in {blk}" for i, blk in zip(split, ('L1', 'L2')) if i]
+    return ' + '.join(parts) or '0'
 
 
 def step1_units(task):
@@ -123,49 +144,68 @@ def linear_baseline(task):
     (``task.opt.integrators``, a number) in the user's units, the
     ``res.linear`` of `Search.baseline`."""
     (k, lin), = step2_linear_baseline(task, step1_units(task)).items()
-    return Search(task, lin, k).baseline()
+    block = task.opt.integrator_block
+    split = integrator_split(k, task.orders, 'L1' if block == 'auto'
+                             else block)
+    return Search(task, lin, split).baseline()
 
 
 def step3_integrators(task, linears):
-    """Step 3: the search (steps 4 to 12) from each linear fit; without an
-    integrator restarted from the fit with one if that ended cheaper; the
-    lower AIC."""
-    fits = {k: Search(task, lin, k).run() for k, lin in linears.items()}
-    if len(fits) > 1 and fits[1][1]['cost'] < fits[0][1]['cost']:
-        # the fit without an integrator nests the one with (a pole just
-        # inside z = 1): when it ended worse, it stopped in a poorer
-        # basin, so it restarts from the other one's model
-        fits[0] = _unintegrated(task, fits[0], fits[1])
+    """Step 3: the search (steps 4 to 12) from each linear fit, with an
+    integrator in each block `integrator_splits` allows ('auto': L1 and
+    L2); without an integrator restarted from the cheapest fit with one if
+    that ended cheaper; the lower AIC, above the integrator-free floor."""
+    block = task.opt.integrator_block
+    fits = {split: Search(task, lin, split).run()
+            for k, lin in linears.items()
+            for split in integrator_splits(k, task.orders, block)}
+    free = (0, 0)
+    if free in fits and len(fits) > 1:
+        cheapest = min((s for s in fits if s != free),
+                       key=lambda s: fits[s][1]['cost'])
+        if fits[cheapest][1]['cost'] < fits[free][1]['cost']:
+            # the fit without an integrator nests the one with (a pole
+            # just inside z = 1): when it ended worse, it stopped in a
+            # poorer basin, so it restarts from the other one's model
+            fits[free] = _unintegrated(task, fits[free], fits[cheapest])
     n = sum(part.size for part in task.u)
 
-    def aic(k):
-        prob, out, _ = fits[k]
+    def aic(split):
+        prob, out, _ = fits[split]
         return n * np.log(max(out["cost"], 1e-300)) + 2 * prob.st.size
 
-    k = min(fits, key=aic)
-    floor = _integrator_floor(fits, k)
+    chosen = min(fits, key=aic)
+    floor = _integrator_floor(fits, chosen)
     prob, best, linear = fits[floor]
     if len(fits) > 1:
-        linear['message'] += (
-            f"; integrators='auto' chose {k} by AIC of the sandwich fits ("
-            + ', '.join(f"{j}: {aic(j):.6g}" for j in sorted(fits)) + ")")
-        if floor != k:
-            linear['message'] += (
-                "; but the integrating sandwich fits worse than the "
-                "integrator-free linear fit, so the integrator-free one "
-                "is kept")
+        label = split_label if block == 'auto' else sum
+        who = ("integrators='auto'" if task.opt.integrators == 'auto'
+               else "integrator_block='auto'")
+        text = (
+            f"; {who} chose {label(chosen)} by AIC of the sandwich fits ("
+            + ', '.join(f"{label(j)}: {aic(j):.6g}" for j in sorted(
+                fits, key=lambda j: (sum(j), -j[0]))) + ")")
+        if floor != chosen:
+            text += ("; but the integrating sandwich fits worse than the "
+                     "integrator-free linear fit, so the integrator-free "
+                     "one is kept")
+        linear['message'] += text
+        if block == 'auto':             # where it went: the model's own
+            best['message'] += text
     return prob, best, linear
 
 
-def _integrator_floor(fits, k):
+def _integrator_floor(fits, chosen):
     """The never-worse-than-linear floor across the integrator decision:
-    an integrating sandwich `k` = 1 is kept only if it is cheaper than the
-    integrator-free linear fit it must beat (a search without an
-    integrator that diverged or stalled is no evidence for one)."""
-    if k == 1 and 0 in fits and not fits[1][1]['cost'] < fits[0][2].get(
-            'held', fits[0][2])['cost_scaled']:
-        return 0
-    return k
+    an integrating sandwich `chosen` (an (i1, i2) of `fits`, in either
+    block) is kept only if it is cheaper than the integrator-free linear
+    fit it must beat (a search without an integrator that diverged or
+    stalled is no evidence for one)."""
+    free = (0, 0)
+    if sum(chosen) and free in fits and not fits[chosen][1]['cost'] < \
+            fits[free][2].get('held', fits[free][2])['cost_scaled']:
+        return free
+    return chosen
 
 
 def _unintegrated(task, free, integrating):
@@ -177,7 +217,7 @@ def _unintegrated(task, free, integrating):
     prob0, best0, linear0 = free
     sign = best1['sign']
     if prob0.sign != sign:
-        prob0 = task.problem(0, sign)
+        prob0 = task.problem((0, 0), sign)
     st0, st1 = prob0.st, prob1.st
     theta = st1.theta(best1['phi'])
     nc, na = task.orders['nc'], task.orders['na']
@@ -189,7 +229,7 @@ def _unintegrated(task, free, integrating):
     phi[st0.q:] = best1['phi'][st1.q:]       # offsets, initial conditions
     if not st0.stable(phi):
         return free
-    restart = Search(task, None, 0, probs={sign: prob0})
+    restart = Search(task, None, (0, 0), probs={sign: prob0})
     out = restart.polish(restart.converge(sign, phi))
     if not out['cost'] < best0['cost']:
         return free
@@ -208,16 +248,18 @@ def _head(parts, n):
 
 
 class Search:
-    """The search of one integrator count k from the linear fit `lin`
-    (steps 4 to 12); `run` runs them. ``probs`` maps a gain sign to its
+    """The search with the integrators `split` = (i1, i2) in L1 and L2
+    from the linear fit `lin` with i1 + i2 of them (steps 4 to 12); `run`
+    runs them. ``probs`` maps a gain sign to its
     scaled `Problem`, ``heads`` to (parametrisation, u, y) of its leading
     `screen_samples` samples, on which the screening runs."""
 
-    def __init__(self, task, lin, k, probs=None):
-        self.task, self.opt, self.lin, self.k = task, task.opt, lin, k
+    def __init__(self, task, lin, split, probs=None):
+        self.task, self.opt, self.lin = task, task.opt, lin
+        self.split, self.k = split, sum(split)
         if probs is None:
             self.sign = -1 if lin['B'][0] < 0 else 1
-            probs = {self.sign: task.problem(k, self.sign)}
+            probs = {self.sign: task.problem(split, self.sign)}
         self.probs = probs
         self.held = None
         self.heads = {}
@@ -303,7 +345,7 @@ class Search:
         if abs(B[0]) < 0.2 * np.max(np.abs(B)):
             # the sign of a small leading coefficient is uncertain: also
             # the other sign, from the linear fit with it flipped
-            self.probs[-sign] = self.task.problem(self.k, -sign)
+            self.probs[-sign] = self.task.problem(self.split, -sign)
             self._head_all()
             flipped = B.copy()
             flipped[0] = -B[0]

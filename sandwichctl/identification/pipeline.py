@@ -5,7 +5,10 @@ the linear model that the sandwich nests:
 
 1. u and y are scaled (units invariance) and a linear output-error model
    of the same total orders is fitted (`identify_linear`'s core, with
-   integrators declared or found by AIC). It is the baseline.
+   integrators declared or found by AIC). It is the baseline. When it
+   has integrators, the search below runs with them in L1 and in L2
+   (``integrator_block='auto'``) and keeps the better sandwich, never
+   worse than the linear fit without an integrator.
 2. Its poles and zeros are assigned to L1 and L2 in every way that keeps
    complex pairs together; each assignment, with m1 = m2 = the linear
    gain and D1 = D2 = 0, is a sandwich with exactly the linear fit.
@@ -110,10 +113,18 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     integrators : int or 'auto', optional
         ``'oe'`` only. Poles fixed at z = 1, e.g. 1 for a speed command in
         and a position out. ``'auto'`` (default) decides from the linear
-        fit (AIC; only tried when it has a real pole above 0.9).
-    integrator_block : {'L1', 'L2'}, optional
-        ``'oe'`` only. Where the integrators go (default 'L1': in a drive
-        the nut's position integrates the speed before the play).
+        fit (AIC; only tried when it has a real pole above 0.9). An
+        integrating model is kept only if it fits better than the linear
+        fit without one.
+    integrator_block : {'auto', 'L1', 'L2'}, optional
+        ``'oe'`` only. Where the integrators go. ``'auto'`` (default)
+        searches with the integrator in L1 and in L2 (each block that has
+        a pole: na > 0, nc > 0) and keeps the lower cost: in a drive the
+        nut's position integrates the speed before the play (L1), behind
+        a valve with play a cylinder integrates the flow after it (L2).
+        This costs one more search, and only when an integrator is tried.
+        ``'L1'`` or ``'L2'`` puts them in that block (the other when it
+        has too few poles). ``res.integrators`` says where they went.
     name : str, optional
         Name of the identified model.
     offsets : {'none', 'mean', 'estimate'}, optional
