@@ -27,6 +27,11 @@ the linear model that the sandwich nests:
    linear model it holds (``res.linear['held']``); it is still judged
    against the linear fit, and the message says which roots could not
    be split and which orders hold them.
+6. An open backlash must generalise: refitted on the leading three
+   quarters of each experiment, the sandwich must predict the held-out
+   last quarter at least as well as the linear model refitted there;
+   otherwise the model is the closed-backlash floor of step 5 and the
+   message says so (``res.held_out``).
    The verdict (``success``) checks stability, convergence, no zero on
    the search bound and that the model explains the data.
 
@@ -317,7 +322,8 @@ def _identify_oe(task):
                               'minimum_phase': opt.minimum_phase,
                               'options': opt.search(),
                               'n_starts': best['n_starts'], 'theta0': None,
-                              'long_record': best.get('long_record')})
+                              'long_record': best.get('long_record'),
+                              'held_out': best.get('held_out')})
 
 
 def _identify_recursive(u, y, orders, method, kw):
