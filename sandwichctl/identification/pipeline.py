@@ -190,8 +190,11 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         the best linear model the structure holds when it cannot hold the
         baseline, see the module documentation); for ``'oe'``
         and a refined recursive estimate also ``std``, and for ``'oe'``
-        ``significance`` (F-test of the backlash), ``whiteness`` and
-        ``integrators``. ``print(res)`` shows them at a glance.
+        ``significance`` (F-test of the backlash), ``whiteness``,
+        ``integrators`` (where they went: ``{'L1': .., 'L2': ..}``) and
+        ``held_out`` (the check that an open backlash predicts the end of
+        each experiment, fitted without it, at least as well as the
+        linear model; see `IdentificationResult`). ``print(res)`` shows them at a glance.
 
     Raises
     ------
