@@ -45,6 +45,9 @@ def test_options_are_frozen_and_checked():
     assert OEOptions(widths=[0.1]).widths == (0.1,)
     with pytest.raises(ValueError, match='integrator_block'):
         OEOptions(integrator_block='L3')
+    assert OEOptions().integrator_block == 'auto'
+    assert {OEOptions(integrator_block=b).integrator_block
+            for b in ('auto', 'L1', 'L2')} == {'auto', 'L1', 'L2'}
     with pytest.raises(ValueError, match='eta0'):
         BundleOptions(eta0=2.0)
     with pytest.raises(ValueError, match='lam0'):

@@ -167,6 +167,29 @@ def test_auto_does_not_give_an_ordinary_plant_an_integrator():
     assert res.cost <= res.linear['cost'] * (1 + 1e-9)
 
 
+def test_an_integrator_after_the_play_is_found_by_default():
+    """A pole at z = 1 in L2 (a valve with play driving a cylinder):
+    the default integrator_block='auto' searches both blocks and keeps
+    the integrator in L2; so does integrators=1, and the message says
+    where it went. The block L1 alone fits worse."""
+    case = random_case(0, n=3000, snr=100, integrating='L2')
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', RuntimeWarning)
+        res = sw.identify(case.u, case.y, **case.orders)
+        one = sw.identify(case.u, case.y, **case.orders, integrators=1)
+        l1 = sw.identify(case.u, case.y, **case.orders,
+                         integrator_block='L1')
+    assert res.integrators == {'L1': 0, 'L2': 1}
+    assert "integrators='auto' chose 1 in L2" in res.message
+    assert "integrator_block='auto' chose 1 in L2" in one.message
+    np.testing.assert_array_equal(one.theta, res.theta)
+    den = res.model.L2.den[0][0]
+    assert abs(np.polyval(den, 1.0)) < 1e-12 * np.sum(np.abs(den))
+    assert res.success and res.cost <= res.linear['cost'] * (1 + 1e-9)
+    assert l1.integrators == {'L1': 1, 'L2': 0}
+    assert res.cost < l1.cost
+
+
 def test_integrator_block_l2():
     case = random_case(105, n=3000, snr=100, integrating=True)
     with warnings.catch_warnings():

@@ -161,7 +161,7 @@ def test_the_fallback_is_the_held_model_with_its_own_message(pair_case):
     plant, u, y, *_ = pair_case
     task = Task([u], [y], dict(ORDERS), OEOptions())
     lin = task.fit_linear(step1_units(task), 0)
-    search = Search(task, lin, 0)
+    search = Search(task, lin, (0, 0))
     assert search.held_start() is not None
     assert search.held is not None and search.held['cost'] > lin['cost']
     search.from_held = lambda best, held: best       # nothing found

@@ -107,6 +107,28 @@ def test_integrator_sits_exactly_at_one(integrating_cases):
         assert np.max(np.abs(x)) < 10 * np.std(x)
 
 
+def test_integrator_in_l2_sits_exactly_at_one():
+    """integrating='L2' puts the pole at z = 1 after the play (counted in
+    nc), L1 keeps the poles of the case without one; 'L1' is True, bit
+    for bit."""
+    for s in range(4):
+        c = random_case(s, integrating='L2', n=2000)
+        plain = random_case(s, n=2000)
+        assert c.integrating == 'L2' and c.case_type == 'integrating'
+        assert c.spec['integrating'] == 'L2'
+        den2 = np.concatenate([[1.0], c.plant.coefficients['c']])
+        assert abs(den2.sum()) < 1e-12                 # C(1) = 0
+        np.testing.assert_array_equal(c.details['poles1'],
+                                      plain.details['poles1'])
+        poles1, _ = _poles_zeros(c.plant.L1)
+        assert np.all(np.abs(poles1) <= 0.95 + 1e-9)
+        assert abs(c.u.mean()) < 1e-9 * c.scale_u     # DC-blocked input
+        one = random_case(s, integrating='L1', n=2000)
+        assert one.integrating is True
+        np.testing.assert_array_equal(
+            one.y, random_case(s, integrating=True, n=2000).y)
+
+
 def test_backlash_widths_relative_to_x(cases, integrating_cases):
     for c in cases + integrating_cases:
         bl = c.plant.backlash

@@ -20,7 +20,8 @@ negative_gain=True)`` is ``random_case(s)`` with the sign of y flipped.
   coefficients), delays q1, q2 in 0..2 with q1 + q2 >= 1.
 - Poles: real or complex pairs with modulus in [0.2, 0.95] (a quarter of
   the real ones negative); `integrating` adds a pole exactly at z = 1 to
-  L1, counted in na.
+  L1, counted in na (``integrating='L2'``: to L2, counted in nc; L1's
+  poles are then those of the case without an integrator).
 - Zeros: real or complex pairs, minimum phase (modulus in [0.1, 0.85]) or,
   with probability 0.3, non-minimum phase (modulus in [1.2, 2.5]); every
   zero is at least 0.2 away from every pole of its block (no
@@ -276,8 +277,9 @@ class SyntheticCase:
         One of `KINDS`.
     n : int
         Number of samples.
-    integrating : bool
-        L1 has a pole exactly at z = 1 (counted in na).
+    integrating : bool or str
+        True: L1 has a pole exactly at z = 1 (counted in na); 'L2': L2
+        has it (counted in nc); False: none.
     negative_gain : bool
         L2's numerator has the opposite sign (b0 * d0 < 0), and y that of
         the same case without this flag.
@@ -295,7 +297,7 @@ class SyntheticCase:
     snr: float
     input_kind: str
     n: int
-    integrating: bool
+    integrating: object
     negative_gain: bool
     seed: int
     scale_u: float
@@ -332,6 +334,16 @@ def _check_snr(snr):
             and not isinstance(snr, bool) and snr == np.inf:
         return np.inf
     return check_positive('snr', snr)
+
+
+def _check_integrating(value):
+    """``integrating`` checked: False, True ('L1' is True) or 'L2'."""
+    if isinstance(value, str) and value in ('L1', 'L2'):
+        return True if value == 'L1' else value
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"integrating must be True, False, 'L1' or 'L2'; "
+                        f"got {type(value).__name__} {value!r}")
+    return bool(value)
 
 
 def _check_bool(name, value):
@@ -373,9 +385,14 @@ def random_case(seed, *, snr=None, n=None, input_kind=None,
         `N_RANGE`, rounded to 100.
     input_kind : str, optional
         One of `KINDS`. Default: drawn at random.
-    integrating : bool, optional
-        Put one pole exactly at z = 1 in L1 (counted in na) and feed a
-        DC-blocked input so that x stays bounded.
+    integrating : {False, True, 'L1', 'L2'}, optional
+        True (or 'L1'): put one pole exactly at z = 1 in L1 (counted in
+        na), as a drive's nut integrates the speed before the play; 'L2':
+        in L2 (counted in nc), as a cylinder integrates the flow of a
+        valve after its play. Either way the input is DC-blocked so that
+        x stays bounded (with an integrator in L2 the asymmetry of the
+        backlash still makes y drift). The case's ``integrating`` is True
+        for 'L1'.
     negative_gain : bool, optional
         Flip the sign of L2's numerator: b0 * d0 < 0, so the plant has a
         negative gain and the paper's normalisation b0 = d0 = 1 does not
@@ -402,7 +419,7 @@ def random_case(seed, *, snr=None, n=None, input_kind=None,
     if input_kind is not None and input_kind not in KINDS:
         raise ValueError(f"input_kind must be one of {list(KINDS)} or "
                          f"None; got {input_kind!r}")
-    integrating = _check_bool('integrating', integrating)
+    integrating = _check_integrating(integrating)
     negative_gain = _check_bool('negative_gain', negative_gain)
 
     r_meta, r_plant, r_input, r_noise = (
@@ -427,10 +444,13 @@ def random_case(seed, *, snr=None, n=None, input_kind=None,
         q1, q2 = (int(v) for v in r_plant.integers(0, 3, 2))
         if q1 + q2 >= 1:
             break
-    poles1 = _random_poles(na - 1 if integrating else na, r_plant)
-    if integrating:
+    in_l2 = integrating == 'L2'
+    poles1 = _random_poles(na - 1 if integrating is True else na, r_plant)
+    if integrating is True:
         poles1 = np.concatenate([[1.0 + 0j], poles1])
-    poles2 = _random_poles(nc, r_plant)
+    poles2 = _random_poles(nc - 1 if in_l2 else nc, r_plant)
+    if in_l2:
+        poles2 = np.concatenate([[1.0 + 0j], poles2])
     zeros1 = _random_zeros(nb, poles1, r_plant)
     zeros2 = _random_zeros(nd, poles2, r_plant)
     ratio = r_plant.uniform(*_M_LOG_RATIO)

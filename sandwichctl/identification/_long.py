@@ -2,7 +2,7 @@
 (private).
 
 A drive that logs at 1 to 10 kHz gives millions of samples in an hour.
-The search of `_search` (steps 1 to 12) refines several starts to
+The search of `_search` (steps 1 to 13) refines several starts to
 convergence, polishes the best and hops around it, all on the whole
 record: about 25 s on a million samples of the paper's plant, and over a
 minute for larger orders. Its job is to find the basin of the best
@@ -11,13 +11,15 @@ last descent needs every sample, for the statistical precision of the
 estimate. So a record of more than `LONG_RECORD` samples is identified
 in two stages:
 
-1. the whole search (steps 1 to 12, the integrator decision included)
-   on the leading `LONG_HEAD` samples (each experiment in proportion to
-   its length, from its own start, so its initial conditions are the
-   same);
-2. on all the samples: the linear baseline of the chosen integrator
-   count (as the search on all of them fits it: a start from the
-   leading samples' fit can end in another local optimum),
+1. the whole search (steps 1 to 13, the integrator decision, its block
+   and the held-out check included) on the leading `LONG_HEAD` samples
+   (each experiment in proportion to its length, from its own start, so
+   its initial conditions are the same); a backlash closed by the
+   held-out check stays closed;
+2. on all the samples, with the integrators where stage 1 put them: the
+   linear baseline of their count (as the search on all of them fits
+   it: a start from the leading samples' fit can end in another local
+   optimum),
    Levenberg-Marquardt to convergence from the model of stage 1 (the
    search's ``tol``), and the never-worse-than-linear floor (step 12)
    against that baseline.
@@ -59,25 +61,31 @@ def long_search(task):
     if not all(np.ptp(part) > 0 for part in head.u + head.y):
         return search(task)       # a constant start: it cannot find a basin
     prob_h, best_h, linear_h = search(head)
-    k = prob_h.st.i1 + prob_h.st.i2
-    full = Search(task, task.fit_linear(step1_units(task), k), k)
+    split = (prob_h.st.i1, prob_h.st.i2)
+    full = Search(task, task.fit_linear(step1_units(task), sum(split)),
+                  split)
     sign = best_h['sign']
     if sign not in full.probs:
-        full.probs[sign] = task.problem(k, sign)
+        full.probs[sign] = task.problem(split, sign)
     prob = full.probs[sign]
     prob.st.zero_radius = prob_h.st.zero_radius
     best = {'cost': np.inf}                 # step 12 on all: the fallback
     if not best_h.get('fallback'):
         best = full.converge(sign, _carried(prob_h, prob, best_h['phi']))
     best = full.step12_never_worse_than_linear(best)
+    best['held_out'] = best_h.get('held_out')
+    if best_h.get('held_out') and best_h['held_out'].get('open') is False:
+        best['message'] = best_h['message']      # step 13 closed it
     n, n_head = prob.n_samples, prob_h.n_samples
     best['n_starts'] = best_h['n_starts']
     best['long_record'] = {'samples': n, 'head': n_head}
+    _, auto, text = linear_h['message'].partition("; integrator")
+    if task.opt.integrator_block == 'auto':
+        best['message'] += auto + text
     best['message'] += (f"; long record: the search ran on the leading "
                         f"{n_head:,} of {n:,} samples, the refinement on "
                         f"all of them")
     linear = full.baseline()
-    _, auto, text = linear_h['message'].partition("; integrators=")
     linear['message'] += auto + text
     return full.probs[best['sign']], best, linear
 

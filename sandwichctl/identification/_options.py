@@ -25,6 +25,10 @@ RECURSIVE = ('bundle', 'gradient', 'rpem')
 METHODS = ('oe',) + RECURSIVE
 
 
+#: Where `identify` puts the integrators (``integrator_block=``): 'auto'
+#: searches every block with a pole, 'L1' and 'L2' fill that block first.
+INTEGRATOR_BLOCKS = ('auto', 'L1', 'L2')
+
 #: The blocks `identify` can keep minimum-phase (``minimum_phase=``).
 MINIMUM_PHASE = ('L1',)
 
@@ -64,8 +68,9 @@ class OEOptions(_Options):
     integrators : int or 'auto'
         Poles fixed at z = 1 (step 3); 'auto' decides by AIC when the
         linear fit has a real pole above 0.9.
-    integrator_block : {'L1', 'L2'}
-        Where the integrators go.
+    integrator_block : {'auto', 'L1', 'L2'}
+        Where the integrators go: 'auto' searches each block with a pole
+        (step 3).
     initial_state : {'zero', 'estimate'}
         Each experiment from rest, or its past values estimated.
     minimum_phase : {None, 'L1'}
@@ -94,7 +99,7 @@ class OEOptions(_Options):
     """
 
     integrators: object = 'auto'
-    integrator_block: str = 'L1'
+    integrator_block: str = 'auto'
     initial_state: str = 'zero'
     minimum_phase: object = None
     widths: tuple = (0.05, 0.25)
@@ -129,8 +134,10 @@ class OEOptions(_Options):
                                 and not isinstance(k, bool) and k >= 0)):
             raise ValueError(f"integrators must be an integer >= 0 or "
                              f"'auto'; got {k!r}")
-        if self.integrator_block not in ('L1', 'L2'):
-            raise ValueError(f"integrator_block must be 'L1' or 'L2'; got "
+        if not (isinstance(self.integrator_block, str)
+                and self.integrator_block in INTEGRATOR_BLOCKS):
+            raise ValueError(f"integrator_block must be one of "
+                             f"{list(INTEGRATOR_BLOCKS)}; got "
                              f"{self.integrator_block!r}")
         check_option('initial_state', self.initial_state,
                      ('zero', 'estimate'))

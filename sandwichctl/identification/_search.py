@@ -9,7 +9,10 @@ or method here, in that order and with that number:
   them; `linear_baseline` runs steps 1 and 2 alone, the baseline the
   recursive methods are judged against);
 - `Search.step4_nested_starts` to `Search.step12_never_worse_than_linear`:
-  the search of one integrator count from its linear fit.
+  the search with the integrators in given blocks from the linear fit
+  of their count (step 3 runs it for each, and chooses);
+- `step13_held_out`: the chosen model's open backlash cross-checked on
+  held-out tails of the record.
 
 The starts come from `_starts`, the solver is `_lm.lm`, the problem and
 its verdict from `_problem`. A new start is one function in `_starts` and
@@ -42,14 +45,20 @@ RELOCATE_KEEP = 2
 RELOCATE_REFIT_ITER = 20
 #: Where the integrator of a model goes when it restarts a fit without one.
 UNINTEGRATED_POLE = 0.99
+#: Share of each experiment's samples, at its end, held out by step 13.
+HELD_OUT = 0.25
+#: Step 13 is skipped when the held-out tails have fewer samples.
+MIN_HELD_OUT = 500
+#: Most Levenberg-Marquardt iterations of step 13's refit on the heads.
+HELD_OUT_ITER = 30
 
 
 def search(task):
-    """Steps 1 to 12 on `task` (a `Task`): the problem, the best `lm`
+    """Steps 1 to 13 on `task` (a `Task`): the problem, the best `lm`
     output and the linear baseline of the chosen integrator count."""
     scaled = step1_units(task)
     linears = step2_linear_baseline(task, scaled)
-    return step3_integrators(task, linears)
+    return step13_held_out(task, *step3_integrators(task, linears))
 
 
 class Task:
@@ -67,9 +76,10 @@ class Task:
         self.shape = (o['nb'] + o['nd'] + 1, o['na'] + o['nc'],
                       o['q1'] + o['q2'])
 
-    def problem(self, k, sign):
-        """The scaled problem with k integrators and gain sign `sign`."""
-        i1, i2 = integrator_split(k, self.orders, self.opt.integrator_block)
+    def problem(self, split, sign):
+        """The scaled problem with the integrators `split` = (i1, i2) in L1
+        and L2 and gain sign `sign`."""
+        i1, i2 = split
         return Problem(self.u, self.y, self.orders, i1=i1, i2=i2, sign=sign,
                        dt=self.dt, name=self.name, offsets=self.offsets,
                        inits=self.inits,
@@ -93,6 +103,25 @@ def integrator_split(k, orders, block):
     i_first = min(k, first)
     i_second = k - i_first
     return (i_first, i_second) if block == 'L1' else (i_second, i_first)
+
+
+def integrator_splits(k, orders, block):
+    """The (i1, i2) the search tries for k integrators: the one of
+    `integrator_split` for a `block` 'L1' or 'L2'; for 'auto' every way
+    of placing them in blocks with poles enough (na for L1, nc for L2),
+    L1's fullest first."""
+    if block != 'auto' or k == 0:
+        return [integrator_split(k, orders, 'L1' if block == 'auto'
+                                 else block)]
+    na, nc = orders['na'], orders['nc']
+    return [(i1, k - i1) for i1 in range(min(k, na), -1, -1)
+            if k - i1 <= nc]
+
+
+def split_label(split):
+    """'1 in L1', '1 in L2', '1 in L1 + 1 in L2' or '0' for (i1, i2)."""
+    parts = [f"{i} in {blk}" for i, blk in zip(split, ('L1', 'L2')) if i]
+    return ' + '.join(parts) or '0'
 
 
 def step1_units(task):
@@ -123,49 +152,146 @@ def linear_baseline(task):
     (``task.opt.integrators``, a number) in the user's units, the
     ``res.linear`` of `Search.baseline`."""
     (k, lin), = step2_linear_baseline(task, step1_units(task)).items()
-    return Search(task, lin, k).baseline()
+    block = task.opt.integrator_block
+    split = integrator_split(k, task.orders, 'L1' if block == 'auto'
+                             else block)
+    return Search(task, lin, split).baseline()
 
 
 def step3_integrators(task, linears):
-    """Step 3: the search (steps 4 to 12) from each linear fit; without an
-    integrator restarted from the fit with one if that ended cheaper; the
-    lower AIC."""
-    fits = {k: Search(task, lin, k).run() for k, lin in linears.items()}
-    if len(fits) > 1 and fits[1][1]['cost'] < fits[0][1]['cost']:
-        # the fit without an integrator nests the one with (a pole just
-        # inside z = 1): when it ended worse, it stopped in a poorer
-        # basin, so it restarts from the other one's model
-        fits[0] = _unintegrated(task, fits[0], fits[1])
+    """Step 3: the search (steps 4 to 12) from each linear fit, with an
+    integrator in each block `integrator_splits` allows ('auto': L1 and
+    L2); without an integrator restarted from the cheapest fit with one if
+    that ended cheaper; the lower AIC, above the integrator-free floor.
+    Returns (problem, best, linear baseline, the `Search` it came from)."""
+    block = task.opt.integrator_block
+    searches = {split: Search(task, lin, split)
+                for k, lin in linears.items()
+                for split in integrator_splits(k, task.orders, block)}
+    fits = {split: one.run() for split, one in searches.items()}
+    free = (0, 0)
+    if free in fits and len(fits) > 1:
+        cheapest = min((s for s in fits if s != free),
+                       key=lambda s: fits[s][1]['cost'])
+        if fits[cheapest][1]['cost'] < fits[free][1]['cost']:
+            # the fit without an integrator nests the one with (a pole
+            # just inside z = 1): when it ended worse, it stopped in a
+            # poorer basin, so it restarts from the other one's model
+            fits[free] = _unintegrated(task, fits[free], fits[cheapest])
     n = sum(part.size for part in task.u)
 
-    def aic(k):
-        prob, out, _ = fits[k]
+    def aic(split):
+        prob, out, _ = fits[split]
         return n * np.log(max(out["cost"], 1e-300)) + 2 * prob.st.size
 
-    k = min(fits, key=aic)
-    floor = _integrator_floor(fits, k)
+    chosen = min(fits, key=aic)
+    floor = _integrator_floor(fits, chosen)
     prob, best, linear = fits[floor]
     if len(fits) > 1:
-        linear['message'] += (
-            f"; integrators='auto' chose {k} by AIC of the sandwich fits ("
-            + ', '.join(f"{j}: {aic(j):.6g}" for j in sorted(fits)) + ")")
-        if floor != k:
-            linear['message'] += (
-                "; but the integrating sandwich fits worse than the "
-                "integrator-free linear fit, so the integrator-free one "
-                "is kept")
-    return prob, best, linear
+        label = split_label if block == 'auto' else sum
+        who = ("integrators='auto'" if task.opt.integrators == 'auto'
+               else "integrator_block='auto'")
+        text = (
+            f"; {who} chose {label(chosen)} by AIC of the sandwich fits ("
+            + ', '.join(f"{label(j)}: {aic(j):.6g}" for j in sorted(
+                fits, key=lambda j: (sum(j), -j[0]))) + ")")
+        if floor != chosen:
+            text += ("; but the integrating sandwich fits worse than the "
+                     "integrator-free linear fit, so the integrator-free "
+                     "one is kept")
+        linear['message'] += text
+        if block == 'auto':             # where it went: the model's own
+            best['message'] += text
+    return prob, best, linear, searches[floor]
 
 
-def _integrator_floor(fits, k):
+def _integrator_floor(fits, chosen):
     """The never-worse-than-linear floor across the integrator decision:
-    an integrating sandwich `k` = 1 is kept only if it is cheaper than the
-    integrator-free linear fit it must beat (a search without an
-    integrator that diverged or stalled is no evidence for one)."""
-    if k == 1 and 0 in fits and not fits[1][1]['cost'] < fits[0][2].get(
-            'held', fits[0][2])['cost_scaled']:
-        return 0
-    return k
+    an integrating sandwich `chosen` (an (i1, i2) of `fits`, in either
+    block) is kept only if it is cheaper than the integrator-free linear
+    fit it must beat (a search without an integrator that diverged or
+    stalled is no evidence for one)."""
+    free = (0, 0)
+    if sum(chosen) and free in fits and not fits[chosen][1]['cost'] < \
+            fits[free][2].get('held', fits[free][2])['cost_scaled']:
+        return free
+    return chosen
+
+
+def step13_held_out(task, prob, best, linear, origin):
+    """Step 13: does the open backlash generalise? The tail of each
+    experiment (`HELD_OUT` of its samples) is held out; the sandwich (by
+    `lm` from its phi, at most `HELD_OUT_ITER` iterations) and the linear
+    fit of its integrators (`_linear.fit_oe`) are fitted again on the
+    heads, and each simulates the whole record from rest with those
+    parameters, scored on the tails alone. A sandwich that predicts the
+    tails worse than the linear model is replaced by the floor of step 12
+    (`Search.closed`, of the `origin` search); when the structure cannot
+    hold the linear fit that floor is the `held` model, and it is the one
+    refitted and compared (`Search.fit_held`). Skipped for a closed
+    backlash already and when the tails hold fewer than `MIN_HELD_OUT`
+    samples. Sets ``best['held_out']`` (None, or a dict of the tails'
+    fits; ``note`` when skipped) and returns (problem, best, linear)."""
+    best['held_out'] = None
+    if best.get('fallback'):
+        return prob, best, linear
+    cut = [part.size - int(np.ceil(HELD_OUT * part.size))
+           for part in prob.u]
+    n_tail = sum(part.size - c for part, c in zip(prob.u, cut))
+    if n_tail < MIN_HELD_OUT:
+        best['held_out'] = {'samples': n_tail, 'note': (
+            f"the open backlash was not cross-checked: the held-out tails "
+            f"would have {n_tail} samples, fewer than {MIN_HELD_OUT}")}
+        return prob, best, linear
+
+    def heads(parts):
+        return [part[:c] for part, c in zip(parts, cut)]
+    starts = np.cumsum([0] + [part.size for part in prob.u[:-1]])
+    tails = np.concatenate([np.arange(c, part.size) + at for part, c, at
+                            in zip(prob.u, cut, starts)])
+    y_tail = np.concatenate(prob.y)[tails]
+    st = prob.st
+    head = lm(st, best['phi'], heads(prob.u), heads(prob.y), HELD_OUT_ITER,
+              task.opt.tol)
+    fit_sw = _fit(st.residuals(head['phi'], prob.u, prob.y)[tails], y_tail)
+    # the linear fit of the same integrators (its gain's sign its own)
+    lin = fit_oe(heads(prob.u), [prob.sign * y for y in heads(prob.y)],
+                 task.shape, st.i1 + st.i2, max_iter=task.opt.max_iter,
+                 tol=task.opt.tol, offsets=task.offsets)
+    fit_lin = _fit((prob.sign * np.concatenate(prob.y)
+                    - fit_output(lin, prob.u, task.shape[2]))[tails], y_tail)
+    name = "the linear model"
+    if fit_sw < fit_lin:
+        if not origin.held_tried:
+            origin.held_start()
+        if origin.held is not None:  # the floor is the model it holds
+            floor = origin.probs[origin.sign]
+            held = origin.fit_held(heads(floor.u), heads(floor.y),
+                                   origin.held['phi'])
+            fit_lin = _fit(floor.st.residuals(held['phi'], floor.u,
+                                              floor.y)[tails], y_tail)
+            name = "the best linear model this structure holds"
+    open_ = bool(np.isfinite(fit_sw) and not fit_sw < fit_lin)
+    best['held_out'] = {'samples': n_tail, 'fit': fit_sw,
+                        'linear_fit': fit_lin, 'open': open_}
+    if open_:
+        return prob, best, linear
+    out = origin.closed(
+        f"the open backlash did not generalise: fitted on the leading "
+        f"{1 - HELD_OUT:.0%} of each experiment, it predicts the held-out "
+        f"rest worse than {name} ({fit_sw:.4g} % against {fit_lin:.4g} %, "
+        f"res.held_out)")
+    out['held_out'] = best['held_out']
+    out['n_starts'] = best['n_starts']
+    return origin.probs[origin.sign], out, dict(
+        linear, **{k: v for k, v in origin.baseline().items() if k == 'held'})
+
+
+def _fit(r, y):
+    """Fit (percent) of residuals r on y; -inf when not finite."""
+    with np.errstate(all='ignore'):
+        fit = 100 * (1 - np.linalg.norm(r) / np.linalg.norm(y - y.mean()))
+    return float(fit) if np.isfinite(fit) else -np.inf
 
 
 def _unintegrated(task, free, integrating):
@@ -177,7 +303,7 @@ def _unintegrated(task, free, integrating):
     prob0, best0, linear0 = free
     sign = best1['sign']
     if prob0.sign != sign:
-        prob0 = task.problem(0, sign)
+        prob0 = task.problem((0, 0), sign)
     st0, st1 = prob0.st, prob1.st
     theta = st1.theta(best1['phi'])
     nc, na = task.orders['nc'], task.orders['na']
@@ -189,7 +315,7 @@ def _unintegrated(task, free, integrating):
     phi[st0.q:] = best1['phi'][st1.q:]       # offsets, initial conditions
     if not st0.stable(phi):
         return free
-    restart = Search(task, None, 0, probs={sign: prob0})
+    restart = Search(task, None, (0, 0), probs={sign: prob0})
     out = restart.polish(restart.converge(sign, phi))
     if not out['cost'] < best0['cost']:
         return free
@@ -208,18 +334,20 @@ def _head(parts, n):
 
 
 class Search:
-    """The search of one integrator count k from the linear fit `lin`
-    (steps 4 to 12); `run` runs them. ``probs`` maps a gain sign to its
+    """The search with the integrators `split` = (i1, i2) in L1 and L2
+    from the linear fit `lin` with i1 + i2 of them (steps 4 to 12); `run`
+    runs them. ``probs`` maps a gain sign to its
     scaled `Problem`, ``heads`` to (parametrisation, u, y) of its leading
     `screen_samples` samples, on which the screening runs."""
 
-    def __init__(self, task, lin, k, probs=None):
-        self.task, self.opt, self.lin, self.k = task, task.opt, lin, k
+    def __init__(self, task, lin, split, probs=None):
+        self.task, self.opt, self.lin = task, task.opt, lin
+        self.split, self.k = split, sum(split)
         if probs is None:
             self.sign = -1 if lin['B'][0] < 0 else 1
-            probs = {self.sign: task.problem(k, self.sign)}
+            probs = {self.sign: task.problem(split, self.sign)}
         self.probs = probs
-        self.held = None
+        self.held, self.held_tried = None, False
         self.heads = {}
         self._head_all()
         self.bar = None
@@ -303,7 +431,7 @@ class Search:
         if abs(B[0]) < 0.2 * np.max(np.abs(B)):
             # the sign of a small leading coefficient is uncertain: also
             # the other sign, from the linear fit with it flipped
-            self.probs[-sign] = self.task.problem(self.k, -sign)
+            self.probs[-sign] = self.task.problem(self.split, -sign)
             self._head_all()
             flipped = B.copy()
             flipped[0] = -B[0]
@@ -333,31 +461,39 @@ class Search:
         when the structure holds the linear fit."""
         sign, prob = self.sign, self.probs[self.sign]
         st, B, F = prob.st, sign * self.lin['B'], self.lin['F']
+        self.held_tried = True
         roots = unsplit(st, B, F)
         if not roots:
             return None
-        im, best = st.im, None
-        sizes = (st.nc_free, st.na_free, st.o[1], st.o[3])
+        best = None
         for phi in held_starts(st, B, F):
-            fit = fit_blocks(prob.u, prob.y, np.delete(phi, [im + 1, im + 2,
-                                                             im + 3]),
-                             sizes, nk=st.o[4] + st.o[5],
-                             integrators=(st.i1, st.i2),
-                             offsets=bool(st.n_off),
-                             max_iter=self.opt.max_iter,
-                             radius=1 - STABILITY_MARGIN)
+            fit = self.fit_held(prob.u, prob.y, phi)
             if best is None or fit['cost'] < best['cost']:
                 best = fit
-        x = best['x']
-        phi = self.extend(sign, np.insert(x, im + 1, [x[im], 0.0, 0.0]))
-        phi[st.q:st.q + st.n_off] = best['offsets'][:st.n_off]
-        phi = st.minimum_phase_start(phi)
+        x, phi = best['x'], best['phi']
         cost = st.cost(phi, prob.u, prob.y)
-        if not (x[im] > 0 and np.isfinite(cost) and st.stable(phi)):
+        if not (x[st.im] > 0 and np.isfinite(cost) and st.stable(phi)):
             return None
         self.held = dict(best, phi=phi, cost=cost, roots=roots,
                          B=sign * best['B'], offsets=sign * best['offsets'])
         return phi
+
+    def fit_held(self, u, y, phi):
+        """The closed-backlash model fitted by `_linear.fit_blocks` on the
+        experiments u, y from phi (its first q entries): the fit, with
+        ``phi`` the model (output offsets, zero initial conditions)."""
+        sign, st = self.sign, self.probs[self.sign].st
+        im = st.im
+        fit = fit_blocks(u, y, np.delete(phi[:st.q], [im + 1, im + 2,
+                                                      im + 3]),
+                         (st.nc_free, st.na_free, st.o[1], st.o[3]),
+                         nk=st.o[4] + st.o[5], integrators=(st.i1, st.i2),
+                         offsets=bool(st.n_off), max_iter=self.opt.max_iter,
+                         radius=1 - STABILITY_MARGIN)
+        x = fit['x']
+        out = self.extend(sign, np.insert(x, im + 1, [x[im], 0.0, 0.0]))
+        out[st.q:st.q + st.n_off] = fit['offsets'][:st.n_off]
+        return dict(fit, phi=st.minimum_phase_start(out))
 
     def from_held(self, best, held):
         """The search again from the `held` linear model (step 12): closed
@@ -546,6 +682,16 @@ class Search:
             best = self.from_held(best, held)
             if best['cost'] <= self.held['cost']:
                 return best
+        return self.closed()
+
+    def closed(self, why=None):
+        """The floor of step 12: the linear fit as a sandwich with a closed
+        backlash (the zero radius lifted to hold its zeros), or the `held`
+        model when the structure cannot hold the linear fit (tried here if
+        step 12 did not); the message says `why` (default: no start
+        improved on it)."""
+        if self.held is None and not self.held_tried:
+            self.held_start()
         prob = self.probs[self.sign]
         st = prob.st
         st.zero_radius = np.inf
@@ -557,11 +703,14 @@ class Search:
             phi = self.held['phi']
             text = ("the best linear model this structure holds (it cannot "
                     "hold the linear fit: res.linear['held'])")
-        out = lm(st, phi, prob.u, prob.y, max_iter=1)
+        # step 12 takes one step (none lowers the cost where the search
+        # started); step 13 keeps the backlash closed, as it says
+        out = lm(st, phi, prob.u, prob.y, max_iter=1 if why is None else 0)
         out['sign'] = self.sign
         out['fallback'] = True
-        out['message'] = (f"no sandwich start improved on {text}: the model "
-                          f"is {text.split(' (')[0]} with a closed backlash")
+        model = f"the model is {text.split(' (')[0]} with a closed backlash"
+        out['message'] = (f"no sandwich start improved on {text}: {model}"
+                          if why is None else f"{why}: {model}")
         if st.minimum_phase_start(phi) is not phi:
             out['message'] += (", its zeros of L1 reflected inside the unit "
                                "circle (minimum_phase='L1')")

@@ -5,7 +5,10 @@ the linear model that the sandwich nests:
 
 1. u and y are scaled (units invariance) and a linear output-error model
    of the same total orders is fitted (`identify_linear`'s core, with
-   integrators declared or found by AIC). It is the baseline.
+   integrators declared or found by AIC). It is the baseline. When it
+   has integrators, the search below runs with them in L1 and in L2
+   (``integrator_block='auto'``) and keeps the better sandwich, never
+   worse than the linear fit without an integrator.
 2. Its poles and zeros are assigned to L1 and L2 in every way that keeps
    complex pairs together; each assignment, with m1 = m2 = the linear
    gain and D1 = D2 = 0, is a sandwich with exactly the linear fit.
@@ -24,6 +27,11 @@ the linear model that the sandwich nests:
    linear model it holds (``res.linear['held']``); it is still judged
    against the linear fit, and the message says which roots could not
    be split and which orders hold them.
+6. An open backlash must generalise: refitted on the leading three
+   quarters of each experiment, the sandwich must predict the held-out
+   last quarter at least as well as the linear model refitted there;
+   otherwise the model is the closed-backlash floor of step 5 and the
+   message says so (``res.held_out``).
    The verdict (``success``) checks stability, convergence, no zero on
    the search bound and that the model explains the data.
 
@@ -110,10 +118,18 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     integrators : int or 'auto', optional
         ``'oe'`` only. Poles fixed at z = 1, e.g. 1 for a speed command in
         and a position out. ``'auto'`` (default) decides from the linear
-        fit (AIC; only tried when it has a real pole above 0.9).
-    integrator_block : {'L1', 'L2'}, optional
-        ``'oe'`` only. Where the integrators go (default 'L1': in a drive
-        the nut's position integrates the speed before the play).
+        fit (AIC; only tried when it has a real pole above 0.9). An
+        integrating model is kept only if it fits better than the linear
+        fit without one.
+    integrator_block : {'auto', 'L1', 'L2'}, optional
+        ``'oe'`` only. Where the integrators go. ``'auto'`` (default)
+        searches with the integrator in L1 and in L2 (each block that has
+        a pole: na > 0, nc > 0) and keeps the lower cost: in a drive the
+        nut's position integrates the speed before the play (L1), behind
+        a valve with play a cylinder integrates the flow after it (L2).
+        This costs one more search, and only when an integrator is tried.
+        ``'L1'`` or ``'L2'`` puts them in that block (the other when it
+        has too few poles). ``res.integrators`` says where they went.
     name : str, optional
         Name of the identified model.
     offsets : {'none', 'mean', 'estimate'}, optional
@@ -174,8 +190,11 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         the best linear model the structure holds when it cannot hold the
         baseline, see the module documentation); for ``'oe'``
         and a refined recursive estimate also ``std``, and for ``'oe'``
-        ``significance`` (F-test of the backlash), ``whiteness`` and
-        ``integrators``. ``print(res)`` shows them at a glance.
+        ``significance`` (F-test of the backlash), ``whiteness``,
+        ``integrators`` (where they went: ``{'L1': .., 'L2': ..}``) and
+        ``held_out`` (the check that an open backlash predicts the end of
+        each experiment, fitted without it, at least as well as the
+        linear model; see `IdentificationResult`). ``print(res)`` shows them at a glance.
 
     Raises
     ------
@@ -306,7 +325,8 @@ def _identify_oe(task):
                               'minimum_phase': opt.minimum_phase,
                               'options': opt.search(),
                               'n_starts': best['n_starts'], 'theta0': None,
-                              'long_record': best.get('long_record')})
+                              'long_record': best.get('long_record'),
+                              'held_out': best.get('held_out')})
 
 
 def _identify_recursive(u, y, orders, method, kw):

@@ -316,6 +316,15 @@ class IdentificationResult(OptimizeResult):
         the residual whiteness summary (`whiteness`), and where the
         model's slope lines cross with the share of samples its x spends
         beyond (``{'x': ..., 'share': ...}``; printed from 10%).
+    held_out
+        From `identify` (``'oe'``): the cross-check of an open backlash
+        (step 13 of docs/algorithm.md), None when the model's backlash is
+        closed anyway. A dict: ``samples`` (held out at the end of each
+        experiment), ``fit`` and ``linear_fit`` (percent, on those samples,
+        of the sandwich and of the linear model fitted without them) and
+        ``open`` (False: the open backlash did not generalise and the
+        model is the closed-backlash floor of step 12); or ``samples`` and
+        ``note`` when the tails were too short to judge.
     long_record
         From `identify` (``'oe'``): None, or for a record of more than
         200,000 samples ``{'samples': ..., 'head': ...}``: the search ran
@@ -343,6 +352,15 @@ class IdentificationResult(OptimizeResult):
                 text += (f"; linear output-error baseline (same total "
                          f"orders): {lin['fit']:.2f} %")
             lines.append(text)
+        held = getattr(self, 'held_out', None)
+        if held and 'fit' in held:
+            lines.append(f"  held-out tails ({held['samples']} samples): "
+                         f"sandwich {held['fit']:.2f} %, linear "
+                         f"{held['linear_fit']:.2f} % (fitted without them)"
+                         + ("" if held['open'] else
+                            ": the open backlash did not generalise"))
+        elif held:
+            lines.append(f"  {held['note']}")
         sig = getattr(self, 'significance', None)
         if sig:
             lines.append(f"  backlash significance: F = {sig['F']:.4g} on "
