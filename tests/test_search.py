@@ -4,6 +4,7 @@ series-parallel cost, hops, relocations and the screening samples."""
 
 import warnings
 
+import control as ct
 import numpy as np
 import pytest
 
@@ -283,3 +284,21 @@ def test_an_open_backlash_that_generalises_is_kept_and_reported():
     assert short.held_out['samples'] == 300
     assert 'fewer than 500' in short.held_out['note']
     assert two.held_out['samples'] == 500 and two.held_out['open']
+
+
+def test_an_integrator_cancelled_by_a_zero_is_a_drift_term():
+    from sandwichctl.identification._search import _drift
+
+    class Fit:
+        def __init__(self, model):
+            self._model = model
+
+        def model(self, phi):
+            return self._model
+
+    plant = sw.examples.paper_plant()
+    L2 = ct.tf([1, -1.00001], [1, -1], 1)
+    drift = sw.SandwichSystem(plant.L1, plant.backlash, L2)
+    assert _drift((Fit(drift), {'phi': None}, None)) == pytest.approx(
+        1.00001)
+    assert _drift((Fit(plant), {'phi': None}, None)) is None

@@ -355,3 +355,20 @@ def test_integrating_plants_that_differ_little_get_gains_that_differ_little(
     jumps = np.max(np.abs(np.diff(np.log(gains), axis=0)), axis=0)
     assert jumps[1] < 0.4 < np.log(10 ** 0.25)
     assert np.all(np.array(gains)[:, 0] >= np.array(coarse) - 1e-12)
+
+
+def test_a_drift_term_is_cancelled_before_the_design():
+    # a pole at z = 1 with a zero at 1.00001 is a drift term of the model,
+    # not an integrator: the design cancels the pair and says so
+    den = np.polymul(np.polymul([1, -1], [1, -0.6]), [1, -0.3])
+    P = ct.tf(np.polymul([0.02, 0.01], [1, -1.00001]), den, 1e-3)
+    ctrl = sw.servo_controller(P)
+    assert any('drift term' in note for note in ctrl.notes)
+    assert ctrl.ki > 0 and ctrl.margins['pole_radius'] < 0.999
+    # in L2 with no delay too (its static inverse stays proper)
+    plant = sw.examples.paper_plant(dt=1e-3)
+    L2 = ct.tf([1, -1.00001], [1, -1], 1e-3) * ct.tf([1, 0], [1, -0.5], 1e-3)
+    drift = sw.SandwichSystem(plant.L1, plant.backlash, L2)
+    ctrl = sw.servo_controller(drift)
+    assert any("L2's pole" in note for note in ctrl.notes)
+    assert ctrl.margins['pole_radius'] < 0.999

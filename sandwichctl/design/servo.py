@@ -86,6 +86,57 @@ def _unwrap_model(model):
     return model, None
 
 
+#: a pole at z = 1 with a zero this close to it is a drift term of the
+#: model, not an integrator of the axis: the pair is cancelled first
+UNIT_CANCEL = 1e-4
+
+
+def _cancel_unit_pair(sys):
+    """`sys` with a pole at z = 1 removed together with the zero next to
+    it (within `UNIT_CANCEL`); its high-frequency gain is kept. Returns
+    (sys, the zero cancelled or None)."""
+    num = np.trim_zeros(sys.num[0][0].astype(float), 'f')
+    den = sys.den[0][0].astype(float)
+    if num.size < 2 or den.size < 2:
+        return sys, None
+    poles, zeros = np.roots(den), np.roots(num)
+    at_one = np.flatnonzero(np.abs(poles - 1) < 1e-6)
+    near = np.flatnonzero(np.abs(zeros - 1) < UNIT_CANCEL)
+    if not (at_one.size and near.size):
+        return sys, None
+    zero = zeros[near[np.argmin(np.abs(zeros[near] - 1))]]
+    num = np.real(num[0] * np.poly(np.delete(zeros, np.flatnonzero(
+        zeros == zero)[:1])))
+    den = np.real(den[0] * np.poly(np.delete(poles, at_one[:1])))
+    return ct.tf(num, den, sys.dt, name=sys.name), float(np.real(zero))
+
+
+def _cancel_drift(model, notes):
+    """A model with its drift terms (`_cancel_unit_pair`) cancelled, each
+    told in `notes`."""
+    if isinstance(model, SandwichSystem):
+        blocks, changed = {}, False
+        for tag in ('L1', 'L2'):
+            blocks[tag], zero = _cancel_unit_pair(getattr(model, tag))
+            if zero is not None:
+                changed = True
+                notes.append(f"{tag}'s pole at z = 1 and its zero at "
+                             f"{zero:.6g} cancelled before the design (a "
+                             f"drift term of the model, not an integrator)")
+        if changed:
+            model = SandwichSystem(blocks['L1'], model.backlash,
+                                   blocks['L2'], name=model.name)
+        return model
+    if isinstance(model, ct.TransferFunction) and model.issiso():
+        cancelled, zero = _cancel_unit_pair(model)
+        if zero is not None:
+            notes.append(f"the pole at z = 1 and the zero at {zero:.6g} "
+                         f"cancelled before the design (a drift term of the "
+                         f"model, not an integrator)")
+            return cancelled
+    return model
+
+
 def _check_plant_tf(name, sys):
     if not isinstance(sys, ct.TransferFunction) or not sys.issiso() or \
             not sys.isdtime(strict=True):
@@ -314,6 +365,8 @@ def _static_inverse(num, den):
     if one.any():
         rest = np.atleast_1d(np.real(np.poly(poles[~one])))
         g = np.polyval(num, 1.0) / np.polyval(rest, 1.0)
+        # (z - 1) / (g z) when the block has no delay: still proper
+        q = max(q, 1)
         return np.array([1.0, -1.0]) / g, np.r_[1.0, np.zeros(q)], q
     return (np.array([np.polyval(den, 1.0) / np.polyval(num, 1.0)]),
             np.r_[1.0, np.zeros(q)], q)
@@ -457,6 +510,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                          f"{operating_point!r}")
     u0, y0 = (check_finite('operating_point', v) for v in operating_point)
     notes = []
+    model = _cancel_drift(model, notes)
     if isinstance(model, SandwichSystem):
         co = model.coefficients
         mbar = 0.5 * (co['m1'] + co['m2'])
@@ -465,6 +519,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         lin_model = (result.linear.get('model') if result is not None
                      and isinstance(getattr(result, 'linear', None), dict)
                      else None)
+        lin_model = _cancel_drift(lin_model, notes)
         integrating = bool(np.any(np.abs(np.roots(L1d) - 1) < 1e-6))
         baseline_note = pid = None
         if isinstance(lin_model, ct.TransferFunction):

@@ -11,8 +11,8 @@ or method here, in that order and with that number:
 - `Search.step4_nested_starts` to `Search.step12_never_worse_than_linear`:
   the search with the integrators in given blocks from the linear fit
   of their count (step 3 runs it for each, and chooses);
-- `step13_held_out`: the chosen model's open backlash cross-checked on
-  held-out tails of the record.
+- `step13_held_out` (in `_held_out`): the chosen model's open backlash
+  cross-checked on held-out tails of the record.
 
 The starts come from `_starts`, the solver is `_lm.lm`, the problem and
 its verdict from `_problem`. A new start is one function in `_starts` and
@@ -22,6 +22,7 @@ say they will run (`Search.planned`).
 
 import numpy as np
 
+from ._held_out import step13_held_out
 from ._lm import lm
 from ._linear import fit_oe, fit_output, fit_blocks, wants_integrator
 from ._predictor import oe_signals
@@ -45,12 +46,6 @@ RELOCATE_KEEP = 2
 RELOCATE_REFIT_ITER = 20
 #: Where the integrator of a model goes when it restarts a fit without one.
 UNINTEGRATED_POLE = 0.99
-#: Share of each experiment's samples, at its end, held out by step 13.
-HELD_OUT = 0.25
-#: Step 13 is skipped when the held-out tails have fewer samples.
-MIN_HELD_OUT = 500
-#: Most Levenberg-Marquardt iterations of step 13's refit on the heads.
-HELD_OUT_ITER = 30
 
 
 def search(task):
@@ -163,7 +158,8 @@ def step3_integrators(task, linears):
     integrator in each block `integrator_splits` allows ('auto': L1 and
     L2); without an integrator restarted from the cheapest fit with one if
     that ended cheaper; the lower AIC, above the integrator-free floor.
-    Returns (problem, best, linear baseline, the `Search` it came from)."""
+    An integrating fit whose pole at z = 1 a zero of the model cancels
+    (`_drift`) is not chosen over the integrator-free one. Returns (problem, best, linear baseline, the `Search` it came from)."""
     block = task.opt.integrator_block
     searches = {split: Search(task, lin, split)
                 for k, lin in linears.items()
@@ -184,7 +180,9 @@ def step3_integrators(task, linears):
         prob, out, _ = fits[split]
         return n * np.log(max(out["cost"], 1e-300)) + 2 * prob.st.size
 
-    chosen = min(fits, key=aic)
+    drifts = {split: _drift(fits[split]) for split in fits if sum(split)}
+    real = [split for split in fits if drifts.get(split) is None]
+    chosen = min(real if free in fits else fits, key=aic)
     floor = _integrator_floor(fits, chosen)
     prob, best, linear = fits[floor]
     if len(fits) > 1:
@@ -195,6 +193,13 @@ def step3_integrators(task, linears):
             f"; {who} chose {label(chosen)} by AIC of the sandwich fits ("
             + ', '.join(f"{label(j)}: {aic(j):.6g}" for j in sorted(
                 fits, key=lambda j: (sum(j), -j[0]))) + ")")
+        passed = [j for j in fits if drifts.get(j) is not None
+                  and aic(j) < aic(chosen) and free in fits]
+        if passed:
+            text += ("; not " + ', '.join(
+                f"{label(j)}, whose pole at z = 1 a zero at "
+                f"{drifts[j]:.6g} cancels (a drift term, not an "
+                f"integrator)" for j in passed))
         if floor != chosen:
             text += ("; but the integrating sandwich fits worse than the "
                      "integrator-free linear fit, so the integrator-free "
@@ -203,6 +208,22 @@ def step3_integrators(task, linears):
         if block == 'auto':             # where it went: the model's own
             best['message'] += text
     return prob, best, linear, searches[floor]
+
+
+#: a zero of the model this close to z = 1 cancels its integrator: the
+#: fit carries a drift term, and is no evidence for an integrator
+DRIFT_ZERO = 1e-4
+
+
+def _drift(fit):
+    """The zero of an integrating fit (problem, best, linear) that cancels
+    its pole at z = 1 (within `DRIFT_ZERO`), or None."""
+    prob, out, _ = fit
+    with np.errstate(all='ignore'):
+        model = prob.model(out['phi'])
+        zeros = np.r_[model.L1.zeros(), model.L2.zeros()]
+    near = zeros[np.abs(zeros - 1) < DRIFT_ZERO]
+    return float(np.real(near[0])) if near.size else None
 
 
 def _integrator_floor(fits, chosen):
@@ -216,82 +237,6 @@ def _integrator_floor(fits, chosen):
             fits[free][2].get('held', fits[free][2])['cost_scaled']:
         return free
     return chosen
-
-
-def step13_held_out(task, prob, best, linear, origin):
-    """Step 13: does the open backlash generalise? The tail of each
-    experiment (`HELD_OUT` of its samples) is held out; the sandwich (by
-    `lm` from its phi, at most `HELD_OUT_ITER` iterations) and the linear
-    fit of its integrators (`_linear.fit_oe`) are fitted again on the
-    heads, and each simulates the whole record from rest with those
-    parameters, scored on the tails alone. A sandwich that predicts the
-    tails worse than the linear model is replaced by the floor of step 12
-    (`Search.closed`, of the `origin` search); when the structure cannot
-    hold the linear fit that floor is the `held` model, and it is the one
-    refitted and compared (`Search.fit_held`). Skipped for a closed
-    backlash already and when the tails hold fewer than `MIN_HELD_OUT`
-    samples. Sets ``best['held_out']`` (None, or a dict of the tails'
-    fits; ``note`` when skipped) and returns (problem, best, linear)."""
-    best['held_out'] = None
-    if best.get('fallback'):
-        return prob, best, linear
-    cut = [part.size - int(np.ceil(HELD_OUT * part.size))
-           for part in prob.u]
-    n_tail = sum(part.size - c for part, c in zip(prob.u, cut))
-    if n_tail < MIN_HELD_OUT:
-        best['held_out'] = {'samples': n_tail, 'note': (
-            f"the open backlash was not cross-checked: the held-out tails "
-            f"would have {n_tail} samples, fewer than {MIN_HELD_OUT}")}
-        return prob, best, linear
-
-    def heads(parts):
-        return [part[:c] for part, c in zip(parts, cut)]
-    starts = np.cumsum([0] + [part.size for part in prob.u[:-1]])
-    tails = np.concatenate([np.arange(c, part.size) + at for part, c, at
-                            in zip(prob.u, cut, starts)])
-    y_tail = np.concatenate(prob.y)[tails]
-    st = prob.st
-    head = lm(st, best['phi'], heads(prob.u), heads(prob.y), HELD_OUT_ITER,
-              task.opt.tol)
-    fit_sw = _fit(st.residuals(head['phi'], prob.u, prob.y)[tails], y_tail)
-    # the linear fit of the same integrators (its gain's sign its own)
-    lin = fit_oe(heads(prob.u), [prob.sign * y for y in heads(prob.y)],
-                 task.shape, st.i1 + st.i2, max_iter=task.opt.max_iter,
-                 tol=task.opt.tol, offsets=task.offsets)
-    fit_lin = _fit((prob.sign * np.concatenate(prob.y)
-                    - fit_output(lin, prob.u, task.shape[2]))[tails], y_tail)
-    name = "the linear model"
-    if fit_sw < fit_lin:
-        if not origin.held_tried:
-            origin.held_start()
-        if origin.held is not None:  # the floor is the model it holds
-            floor = origin.probs[origin.sign]
-            held = origin.fit_held(heads(floor.u), heads(floor.y),
-                                   origin.held['phi'])
-            fit_lin = _fit(floor.st.residuals(held['phi'], floor.u,
-                                              floor.y)[tails], y_tail)
-            name = "the best linear model this structure holds"
-    open_ = bool(np.isfinite(fit_sw) and not fit_sw < fit_lin)
-    best['held_out'] = {'samples': n_tail, 'fit': fit_sw,
-                        'linear_fit': fit_lin, 'open': open_}
-    if open_:
-        return prob, best, linear
-    out = origin.closed(
-        f"the open backlash did not generalise: fitted on the leading "
-        f"{1 - HELD_OUT:.0%} of each experiment, it predicts the held-out "
-        f"rest worse than {name} ({fit_sw:.4g} % against {fit_lin:.4g} %, "
-        f"res.held_out)")
-    out['held_out'] = best['held_out']
-    out['n_starts'] = best['n_starts']
-    return origin.probs[origin.sign], out, dict(
-        linear, **{k: v for k, v in origin.baseline().items() if k == 'held'})
-
-
-def _fit(r, y):
-    """Fit (percent) of residuals r on y; -inf when not finite."""
-    with np.errstate(all='ignore'):
-        fit = 100 * (1 - np.linalg.norm(r) / np.linalg.norm(y - y.mean()))
-    return float(fit) if np.isfinite(fit) else -np.inf
 
 
 def _unintegrated(task, free, integrating):
