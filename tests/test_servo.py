@@ -365,6 +365,10 @@ def test_a_drift_term_is_cancelled_before_the_design():
     ctrl = sw.servo_controller(P)
     assert any('drift term' in note for note in ctrl.notes)
     assert ctrl.ki > 0 and ctrl.margins['pole_radius'] < 0.999
+    # not when another pole is as close to 1: that is no single pair
+    den2 = np.polymul(np.polymul([1, -1], [1, -0.99999]), [1, -0.3])
+    P2 = ct.tf(np.polymul([0.02, 0.01], [1, -1.00001]), den2, 1e-3)
+    assert sw.design.servo._cancel_unit_pair(P2)[1] is None
     # in L2 with no delay too (its static inverse stays proper)
     plant = sw.examples.paper_plant(dt=1e-3)
     L2 = ct.tf([1, -1.00001], [1, -1], 1e-3) * ct.tf([1, 0], [1, -0.5], 1e-3)

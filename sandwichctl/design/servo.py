@@ -93,7 +93,8 @@ UNIT_CANCEL = 1e-4
 
 def _cancel_unit_pair(sys):
     """`sys` with a pole at z = 1 removed together with the zero next to
-    it (within `UNIT_CANCEL`); its high-frequency gain is kept. Returns
+    it (within `UNIT_CANCEL`), when no other pole is that close to 1; its
+    high-frequency gain is kept. Returns
     (sys, the zero cancelled or None)."""
     num = np.trim_zeros(sys.num[0][0].astype(float), 'f')
     den = sys.den[0][0].astype(float)
@@ -102,8 +103,9 @@ def _cancel_unit_pair(sys):
     poles, zeros = np.roots(den), np.roots(num)
     at_one = np.flatnonzero(np.abs(poles - 1) < 1e-6)
     near = np.flatnonzero(np.abs(zeros - 1) < UNIT_CANCEL)
-    if not (at_one.size and near.size):
-        return sys, None
+    if not (at_one.size == 1 and near.size and np.sum(
+            np.abs(poles - 1) < UNIT_CANCEL) == 1):
+        return sys, None      # none, or more poles there than one pair
     zero = zeros[near[np.argmin(np.abs(zeros[near] - 1))]]
     num = np.real(num[0] * np.poly(np.delete(zeros, np.flatnonzero(
         zeros == zero)[:1])))
@@ -626,8 +628,16 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
             if integrating:
                 # L1^-1 turns the jump into a speed pulse: no faster than
                 # the loop follows, or a load that coasts overshoots
-                jump = max(jump, int(round(
-                    JUMP_CROSSOVERS / sd.crossover(num, den, C))))
+                slow = int(round(JUMP_CROSSOVERS / sd.crossover(num, den,
+                                                                 C)))
+                if slow > JUMP_MOST:
+                    notes.append(
+                        f"the loop's crossover is too slow to spread the "
+                        f"band jump over {JUMP_CROSSOVERS:g} of its time "
+                        f"constants ({slow} samples): spread over "
+                        f"{JUMP_MOST} (check the model: a loop this slow "
+                        f"hardly controls the axis)")
+                jump = max(jump, min(slow, JUMP_MOST))
         else:
             jump = check_int('jump_samples', jump_samples, minimum=1)
         lead = jump // 2
@@ -689,6 +699,8 @@ def _scalar_index(ctrl):
 #: drives of benchmarks/bench_servo.py, where it cut the input activity and
 #: kept or lowered the error on every speed loop)
 JUMP_CROSSOVERS = 2.0
+#: but over no more samples than this (each half of it is preview)
+JUMP_MOST = 500
 
 #: the default compensation is turned off when it makes the loop around the
 #: identified model this much worse (a gross failure: on the drives the
