@@ -148,8 +148,8 @@ def _no_peak(a, b):
 def _ki_max(a, b, mm, high):
     """Largest ki >= 0 with |1 + L| >= mm and |L| <= |1 + L| (`_no_peak`)
     at every frequency, and |L| <= 1 at the frequencies flagged `high`
-    (rows of a = 1 + L(ki=0) are
-    designs, columns frequencies; L = a - 1 + ki b); -1 where none."""
+    (rows of a = 1 + L(ki=0) are designs, columns frequencies;
+    L = a - 1 + ki b); -1 where none."""
     r1, r2, c = _roots(a, b, mm)
     ok0 = np.all(c >= 0, axis=1)
     bad = np.isfinite(r1) & (r1 > 0)
@@ -197,13 +197,21 @@ REFINE = 8
 DERIVATIVE_BOOST = 3.0
 
 
-def low_frequency_sign(num, den):
-    """Sign of the plant's DC gain (of its integrator's gain if it has a
-    pole at z = 1)."""
+def low_frequency_gain(num, den):
+    """(n, d, integrating): the plant's DC gain n / d, or its integrator's
+    gain when it has a pole at z = 1 (d is then the rest of the
+    denominator at z = 1)."""
     poles = np.roots(den) if den.size > 1 else np.zeros(0)
     one = np.abs(poles - 1) < 1e-6
     rest = np.atleast_1d(np.real(np.poly(poles[~one]))) if one.any() else den
-    return 1.0 if np.polyval(num, 1.0) / np.polyval(rest, 1.0) >= 0 else -1.0
+    return np.polyval(num, 1.0), np.polyval(rest, 1.0), bool(one.any())
+
+
+def low_frequency_sign(num, den):
+    """Sign of the plant's DC gain (of its integrator's gain if it has a
+    pole at z = 1)."""
+    n, d, _ = low_frequency_gain(num, den)
+    return 1.0 if n / d >= 0 else -1.0
 
 
 def design_pid(num, den, dt, modulus_margin):
@@ -212,9 +220,10 @@ def design_pid(num, den, dt, modulus_margin):
     modulus margin and with :math:`|T| \\le 1` (no frequency of the
     reference amplified: a peak of T rang on the drives, where friction
     damps the loop less than the model says), with the crossover below
-    `CROSSOVER_LIMIT` times the plant's bandwidth, the derivative's high-frequency boost bounded, and a loop that stays
-    stable when its gain is lowered (no conditional stability, which a
-    saturating drive turns into a limit cycle). An integrating plant gets
+    `CROSSOVER_LIMIT` times the plant's bandwidth, the derivative's
+    high-frequency boost bounded, and a loop that stays stable when its
+    gain is lowered (no conditional stability, which a saturating drive
+    turns into a limit cycle). An integrating plant gets
     the PD with the largest kp instead: a type-2 loop around play has no
     rest point and hunts."""
     w = frequency_grid(den)

@@ -109,36 +109,31 @@ def _cancel_unit_pair(sys):
     if not (at_one.size == 1 and near.size and np.sum(
             np.abs(poles - 1) < UNIT_CANCEL) == 1):
         return sys, None      # none, or more poles there than one pair
-    zero = zeros[near[np.argmin(np.abs(zeros[near] - 1))]]
-    num = np.real(num[0] * np.poly(np.delete(zeros, np.flatnonzero(
-        zeros == zero)[:1])))
-    den = np.real(den[0] * np.poly(np.delete(poles, at_one[:1])))
-    return ct.tf(num, den, sys.dt, name=sys.name), float(np.real(zero))
+    i = near[np.argmin(np.abs(zeros[near] - 1))]
+    num = np.real(num[0] * np.poly(np.delete(zeros, i)))
+    den = np.real(den[0] * np.poly(np.delete(poles, at_one)))
+    return ct.tf(num, den, sys.dt, name=sys.name), float(np.real(zeros[i]))
 
 
 def _cancel_drift(model, notes):
     """A model with its drift terms (`_cancel_unit_pair`) cancelled, each
     told in `notes`."""
+    def cancel(sys, pole, zero):
+        out, at = _cancel_unit_pair(sys)
+        if at is not None:
+            notes.append(f"{pole} at z = 1 and {zero} at {at:.6g} cancelled "
+                         f"before the design (a drift term of the model, "
+                         f"not an integrator)")
+        return out
+
     if isinstance(model, SandwichSystem):
-        blocks, changed = {}, False
-        for tag in ('L1', 'L2'):
-            blocks[tag], zero = _cancel_unit_pair(getattr(model, tag))
-            if zero is not None:
-                changed = True
-                notes.append(f"{tag}'s pole at z = 1 and its zero at "
-                             f"{zero:.6g} cancelled before the design (a "
-                             f"drift term of the model, not an integrator)")
-        if changed:
-            model = SandwichSystem(blocks['L1'], model.backlash,
-                                   blocks['L2'], name=model.name)
-        return model
+        L1, L2 = (cancel(getattr(model, tag), f"{tag}'s pole", "its zero")
+                  for tag in ('L1', 'L2'))
+        if L1 is model.L1 and L2 is model.L2:
+            return model
+        return SandwichSystem(L1, model.backlash, L2, name=model.name)
     if isinstance(model, ct.TransferFunction) and model.issiso():
-        cancelled, zero = _cancel_unit_pair(model)
-        if zero is not None:
-            notes.append(f"the pole at z = 1 and the zero at {zero:.6g} "
-                         f"cancelled before the design (a drift term of the "
-                         f"model, not an integrator)")
-            return cancelled
+        return cancel(model, "the pole", "the zero")
     return model
 
 
@@ -365,16 +360,12 @@ def _static_inverse(num, den):
     dynamics invert to, and its slow modes would make the backlash
     output wanted wiggle in a hold, each wiggle a jump across the band."""
     q = den.size - num.size
-    poles = np.roots(den) if den.size > 1 else np.zeros(0)
-    one = np.abs(poles - 1) < 1e-6
-    if one.any():
-        rest = np.atleast_1d(np.real(np.poly(poles[~one])))
-        g = np.polyval(num, 1.0) / np.polyval(rest, 1.0)
+    n, d, integrating = sd.low_frequency_gain(num, den)
+    if integrating:
         # (z - 1) / (g z) when the block has no delay: still proper
         q = max(q, 1)
-        return np.array([1.0, -1.0]) / g, np.r_[1.0, np.zeros(q)], q
-    return (np.array([np.polyval(den, 1.0) / np.polyval(num, 1.0)]),
-            np.r_[1.0, np.zeros(q)], q)
+        return np.array([1.0, -1.0]) / (n / d), np.r_[1.0, np.zeros(q)], q
+    return np.array([d / n]), np.r_[1.0, np.zeros(q)], q
 
 
 def _jump_samples(L1_num, L1_den, band_x, dt, cap=2.0, longest=50):
@@ -415,9 +406,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     :math:`\bar m L_1 L_2`), with the largest integral gain that keeps the
     modulus margin and a complementary sensitivity :math:`|T| \le 1` on a
     log frequency grid reaching below the slowest pole (an integrating
-    plant gets a PD, see the module notes); the loop's poles are checked, so an
-    unstable design is never returned. The feedforward inverts the model
-    along the reference with ``preview`` samples of preview; for a
+    plant gets a PD, see the module notes); the loop's poles are checked,
+    so an unstable design is never returned. The feedforward inverts the
+    model along the reference with ``preview`` samples of preview; for a
     sandwich it contains the backlash inverse (see the module notes).
 
     Parameters
@@ -441,9 +432,10 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         compensates, in [0, 1]. By default 0.25, and 0.1 when L1
         integrates: the play a loop sees is smaller than the mechanical
         gap, since the load coasts into it, and larger shares
-        over-compensated on drives of ``benchmarks/bench_servo.py``. A default compensation that makes
-        the loop around the identified model itself 1.25 times worse is
-        turned off, and the notes say so.
+        over-compensated on drives of ``benchmarks/bench_servo.py``. A
+        default compensation that makes the loop around the identified
+        model itself 1.25 times worse is turned off, and the notes say
+        so.
     smoothing : float, optional
         Smoothing width of the inverse in the model's v (default 2 % of
         the compensated band).
