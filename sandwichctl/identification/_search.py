@@ -88,16 +88,16 @@ class Task:
 
 
 def integrator_split(k, orders, block):
-    """(i1, i2): k integrators in `block` ('L1' or 'L2') first, the rest
-    in the other block."""
+    """(i1, i2): k integrators in `block` ('L1', 'L2', or 'auto' as L1)
+    first, the rest in the other block."""
     na, nc = orders['na'], orders['nc']
-    first, second = (na, nc) if block == 'L1' else (nc, na)
+    first = nc if block == 'L2' else na
     if k > na + nc:
         raise ValueError(f"integrators = {k} exceed the na + nc = "
                          f"{na + nc} poles of the structure")
     i_first = min(k, first)
     i_second = k - i_first
-    return (i_first, i_second) if block == 'L1' else (i_second, i_first)
+    return (i_second, i_first) if block == 'L2' else (i_first, i_second)
 
 
 def integrator_splits(k, orders, block):
@@ -106,8 +106,7 @@ def integrator_splits(k, orders, block):
     of placing them in blocks with poles enough (na for L1, nc for L2),
     L1's fullest first."""
     if block != 'auto' or k == 0:
-        return [integrator_split(k, orders, 'L1' if block == 'auto'
-                                 else block)]
+        return [integrator_split(k, orders, block)]
     na, nc = orders['na'], orders['nc']
     return [(i1, k - i1) for i1 in range(min(k, na), -1, -1)
             if k - i1 <= nc]
@@ -147,9 +146,7 @@ def linear_baseline(task):
     (``task.opt.integrators``, a number) in the user's units, the
     ``res.linear`` of `Search.baseline`."""
     (k, lin), = step2_linear_baseline(task, step1_units(task)).items()
-    block = task.opt.integrator_block
-    split = integrator_split(k, task.orders, 'L1' if block == 'auto'
-                             else block)
+    split = integrator_split(k, task.orders, task.opt.integrator_block)
     return Search(task, lin, split).baseline()
 
 
@@ -159,7 +156,8 @@ def step3_integrators(task, linears):
     L2); without an integrator restarted from the cheapest fit with one if
     that ended cheaper; the lower AIC, above the integrator-free floor.
     An integrating fit whose pole at z = 1 a zero of the model cancels
-    (`_drift`) is not chosen over the integrator-free one. Returns (problem, best, linear baseline, the `Search` it came from)."""
+    (`_drift`) is not chosen over the integrator-free one. Returns
+    (problem, best, linear baseline, the `Search` it came from)."""
     block = task.opt.integrator_block
     searches = {split: Search(task, lin, split)
                 for k, lin in linears.items()
