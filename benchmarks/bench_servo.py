@@ -28,11 +28,15 @@ each: the best share per drive bounds what adapting the share online could
 reach, the worst shows what a larger fixed default would risk. With
 ``--to-margin`` it scales the linear design's gains up until the model's
 modulus margin is met with equality (when the crossover limit, not the
-margin, is what bounds them) and runs that on the drive too.
+margin, is what bounds them) and runs that on the drive too. With
+``--sources``, where the default feedforward inverts the sandwich's own
+linear part mbar L1 L2, it also runs the sandwich design with
+``feedforward_from='model'`` and ``'baseline'`` (the linear baseline
+inverted, the same feedback and band) and prints both ratios.
 
 Run: python benchmarks/bench_servo.py [--seeds 2] [--random 8] [--sweep]
      [--seed0 2 --random0 8] [--feedforward zpetc] [--bands]
-     [--to-margin]
+     [--to-margin] [--sources]
 """
 
 import argparse
@@ -131,12 +135,16 @@ def main():
     ap.add_argument('--to-margin', action='store_true',
                     help='also run the linear design scaled up to its '
                     'modulus margin')
+    ap.add_argument('--sources', action='store_true',
+                    help="also run the sandwich design with its feedforward "
+                    "inverting the model's mbar L1 L2 and the linear "
+                    "baseline, where the default picks the model's")
     ap.add_argument('--feedforward', default='preview',
                     choices=['preview', 'zpetc'],
                     help='how both designs invert zeros outside the unit '
                     'circle')
     args = ap.parse_args()
-    rows, checks, bands, margin = [], [], [], []
+    rows, checks, bands, margin, sources = [], [], [], [], []
     start = time.perf_counter()
     for label, loop, play, dt, params, seed in cases(
             args.seeds, args.random, args.loops.split(','), args.seed0,
@@ -181,6 +189,16 @@ def main():
                           f"{m_sw['rms'] / m_lin['rms']:.2f}",
                           *(f"{x:.2f}" for x in ratios),
                           f"{BAND_SHARES[int(np.argmin(ratios))]:.2f}"])
+        if args.sources and "inverts the sandwich's" in repr(c_sw):
+            got = [run(sw.servo_controller(res, feedforward_from=f), r, loop,
+                       play, dt, params, seed + 500) for f in
+                   ('model', 'baseline')]
+            near = m_lin['near_reversals']
+            sources.append([label, f"{play * 1e6:.0f}",
+                            f"{res.fit - res.linear['fit']:.1f}"]
+                           + [f"{m['rms'] / m_lin['rms']:.2f}" for m in got]
+                           + [f"{m['near_reversals'] / near:.2f}"
+                              for m in got])
         if args.to_margin:
             factor = to_margin(c_lin)
             m_up = run(sw.servo_controller(lin, feedback_scale=factor), r,
@@ -221,6 +239,12 @@ def main():
         print("\nSandwich RMS / linear at fixed band shares:\n")
         print_table(['case', 'play', 'default', 'RMS/lin',
                      *(f"{b:g}" for b in BAND_SHARES), 'best'], bands)
+    if sources:
+        print("\nSandwich / linear where the default feedforward inverts the "
+              "model's mbar L1 L2 (gap: the sandwich's fit over its "
+              "baseline's, points):\n")
+        print_table(['case', 'play', 'gap', 'RMS model', 'RMS baseline',
+                     'near rev. model', 'near rev. baseline'], sources)
     if margin:
         print("\nLinear design scaled up to its modulus margin (RMS um / "
               "hunt):\n")
