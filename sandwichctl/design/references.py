@@ -60,6 +60,10 @@ def steps_and_sines(n=1200, levels=(0.0, 1.0, -0.5, 1.5, 0.3),
     return r
 
 
+#: most samples one part of `servo_reference` may take (a hold or the sine)
+MOST_SAMPLES = 1e8
+
+
 def servo_reference(dt, travel, hold=0.5):
     """A test trajectory for a servo axis, in physical time.
 
@@ -93,6 +97,11 @@ def servo_reference(dt, travel, hold=0.5):
     dt = check_positive('dt', dt)
     travel = check_positive('travel', travel)
     hold = check_positive('hold', hold)
+    longest = max(hold, 2.0) / dt
+    if longest > MOST_SAMPLES:
+        raise ValueError(f"servo_reference: a hold of {hold:g} s (or the "
+                         f"2 s sine) at dt = {dt:g} s is {longest:.3g} "
+                         f"samples; at most {MOST_SAMPLES:.0e} a part")
 
     def count(seconds):
         return max(2, int(round(seconds / dt)))
