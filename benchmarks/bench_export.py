@@ -24,6 +24,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import types
 
 import numpy as np
 import control as ct
@@ -47,12 +48,21 @@ def cases():
     nmp = sw.SandwichSystem(ct.tf([1.0], [1, -0.5], DT), bl,
                             ct.tf([-0.2, 0.5], [1, -0.7, 0.1], DT))
     linear = ct.tf([0.02, 0.01], np.polymul([1, -1], [1, -0.6]), DT)
+    # an identification result of the paper's plant with half its band:
+    # the design estimates the band's gain online
+    co = paper.coefficients
+    half = sw.SandwichSystem.from_coefficients(
+        **{**co, 'D1': 0.5 * co['D1'], 'D2': 0.5 * co['D2']}, dt=paper.dt)
+    result = types.SimpleNamespace(model=half, success=True, fit=95.0,
+                                   linear=dict(model=paper.L1 * paper.L2,
+                                               fit=90.0))
     return {
         'linear, type 1': (linear, sw.servo_controller(linear)),
         'sandwich (paper)': (paper, sw.servo_controller(paper)),
         'sandwich, jump 5': (paper, sw.servo_controller(paper,
                                                          jump_samples=5)),
         'sandwich, NMP L2': (nmp, sw.servo_controller(nmp)),
+        'sandwich, band online': (paper, sw.servo_controller(result)),
         'compensator': (paper, sw.sandwich_compensator(paper,
                                                        smoothing=0.05)),
     }

@@ -76,6 +76,7 @@ SERVOS = {
                                                    jump_samples=3)),
     'nmp_L2_zpetc': lambda: (NMP_L2, sw.servo_controller(
         NMP_L2, feedforward='zpetc')),
+    'sandwich_adapt': lambda: (PAPER, sw.servo_controller(_identified())),
 }
 COMPENSATORS = {
     'comp': lambda: sw.sandwich_compensator(PAPER),
@@ -85,6 +86,18 @@ COMPENSATORS = {
     'comp_integrating': lambda: sw.sandwich_compensator(INTEGRATING,
                                                         smoothing=0.01),
 }
+
+
+def _identified():
+    """An identification-like result around the paper's plant with half
+    its band: its design estimates the band's gain online."""
+    import types
+    co = PAPER.coefficients
+    half = sw.SandwichSystem.from_coefficients(
+        **{**co, 'D1': 0.5 * co['D1'], 'D2': 0.5 * co['D2']}, dt=PAPER.dt)
+    return types.SimpleNamespace(model=half, success=True, fit=95.0,
+                                 linear=dict(model=PAPER.L1 * PAPER.L2,
+                                             fit=90.0))
 
 
 def _reference(model):
@@ -190,6 +203,11 @@ def test_the_cases_cover_what_the_issue_asks(built):
     for model, block in ((NMP_L1, 'L1'), (NMP_L2, 'L2')):
         assert np.any(np.abs(getattr(model, block).zeros()) > 1)
     assert ctrls['nmp_L2'].preview >= 5
+    adapting = ctrls['sandwich_adapt']
+    assert adapting.adapts and not any(
+        c.adapts for k, c in ctrls.items() if k != 'sandwich_adapt')
+    _loop(PAPER, adapting)
+    assert abs(adapting.band_gain - 1.0) > 0.05     # the estimate moves
     # the smoothed branch of the inverse is taken (steps of its input
     # smaller than the width) and so are the exact one and holds
     ctrl = ctrls['sandwich']

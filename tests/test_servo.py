@@ -376,3 +376,68 @@ def test_a_drift_term_is_cancelled_before_the_design():
     ctrl = sw.servo_controller(drift)
     assert any("L2's pole" in note for note in ctrl.notes)
     assert ctrl.margins['pole_radius'] < 0.999
+
+
+def _mismatched(scale):
+    """A sandwich plant and an identification-like result whose backlash
+    band is `scale` times the plant's (the rest is the plant's own)."""
+    import types
+    kw = dict(a=[-0.7], b=[0.5], c=[-0.5], d=[0.3], m1=1.0, m2=1.0,
+              dt=1e-3)
+    plant = sw.SandwichSystem.from_coefficients(D1=0.2, D2=0.2, **kw)
+    model = sw.SandwichSystem.from_coefficients(D1=0.2 * scale,
+                                                D2=0.2 * scale, **kw)
+    return plant, types.SimpleNamespace(
+        model=model, success=True, fit=95.0,
+        linear=dict(model=plant.L1 * plant.L2, fit=90.0))
+
+
+@pytest.mark.parametrize('scale, low, high', [(0.5, 1.3, 3.0),
+                                               (1.0, 0.85, 1.15),
+                                               (2.0, 0.0, 0.8)])
+def test_the_band_gain_follows_the_play_the_loop_meets(scale, low, high):
+    """Designed from a result whose band is half, equal to or twice the
+    plant's, the online estimate moves the band's gain up, leaves it, or
+    moves it down, and the loop tracks at least as well as with the gain
+    fixed."""
+    plant, result = _mismatched(scale)
+    r = sw.servo_reference(1e-3, 5.0)
+    fixed = sw.servo_controller(result, adapt=False)
+    ctrl = sw.servo_controller(result)
+    assert ctrl.adapts and not fixed.adapts
+    assert any("estimated online" in n for n in ctrl.notes)
+    err = [np.sqrt(np.mean((r - sw.closed_loop_response(
+        plant, r, c).outputs[0]) ** 2)) for c in (fixed, ctrl)]
+    assert fixed.band_gain == 1.0
+    assert low < ctrl.band_gain < high
+    assert err[1] <= 1.01 * err[0]
+
+
+def test_reset_restarts_the_online_estimate_and_c_state_is_python_state():
+    plant, result = _mismatched(0.5)
+    ctrl = sw.servo_controller(result)
+    r = sw.servo_reference(1e-3, 5.0)[:4000]
+    u = sw.closed_loop_response(plant, r, ctrl).outputs[1]
+    moved = ctrl.band_gain
+    assert moved != 1.0
+    ctrl.reset()
+    assert ctrl.band_gain == 1.0 and not np.any(ctrl.state)
+    # stepping by hand from the reset gives the same loop and estimate
+    again = sw.closed_loop_response(plant, r, ctrl).outputs[1]
+    np.testing.assert_array_equal(u, again)
+    assert ctrl.band_gain == moved
+    # the python-control system carries the estimate in its state
+    clone = pickle.loads(pickle.dumps(ctrl))
+    assert clone.band_gain == moved and clone.adapts
+
+
+def test_adapt_is_refused_where_there_is_nothing_to_adapt():
+    plant, result = _mismatched(1.0)
+    with pytest.raises(ValueError, match="identification result"):
+        sw.servo_controller(plant, adapt=True)
+    with pytest.raises(ValueError, match="band_fraction > 0"):
+        sw.servo_controller(result, adapt=True, band_fraction=0.0)
+    # a share given by hand is kept unless adapt=True asks otherwise
+    assert not sw.servo_controller(result, band_fraction=0.25).adapts
+    assert sw.servo_controller(result, band_fraction=0.25, adapt=True).adapts
+    assert not sw.servo_controller(plant).adapts

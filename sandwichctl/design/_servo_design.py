@@ -351,3 +351,73 @@ def loop_margins(num, den, C):
     turn = np.flatnonzero((np.diff(np.sign(L.imag)) != 0) & (L.real[1:] < 0))
     gm = float(np.min(1 / mag[turn + 1])) if turn.size else np.inf
     return mm, gm, pm, loop_radius(num, den, C)
+
+
+#: memory of the online estimate of the band's gain, in samples (its
+#: forgetting factor is 1 - 1/ADAPT_MEMORY)
+ADAPT_MEMORY = 2000
+#: the estimate starts from the designed band with a prior worth this many
+#: band jumps of data
+ADAPT_PRIOR = 10
+#: its covariance grows back (forgetting) to at most this many times the
+#: initial one while the reference holds still
+ADAPT_WINDUP = 10.0
+#: the band's gain stays in [0, ADAPT_MOST] (and the share at most 1)
+ADAPT_MOST = 3.0
+
+
+def band_adaptation(adapt, num, den, C, post, band_x, share, exact,
+                    by_default, scal, notes):
+    """(A, B, C, D) of the process sensitivity when the band's gain is
+    estimated online (`servo_controller`'s ``adapt``), else None; fills
+    the estimate's scalars into `scal` and says so in `notes`. `post` is
+    the band path's (A, B, C, D)."""
+    if adapt is False or (adapt is None and (
+            exact or not by_default or band_x <= 0)):
+        return None
+    if exact or band_x <= 0:
+        raise ValueError(
+            "adapt=True needs a band to adapt: a design from an "
+            "identification result (a known model is inverted exactly) "
+            "with band_fraction > 0")
+    got = adaptation(num, den, C, ct.ss(*post, C.dt), band_x)
+    if got is None:
+        if adapt:
+            raise ValueError("adapt=True: the loop's process sensitivity "
+                             "is not strictly proper, so the error cannot "
+                             "tell the band's gain (check the model's "
+                             "delay)")
+        return None
+    ps, lam, p0 = got
+    most = min(ADAPT_MOST, 1.0 / share)
+    scal[8:12] = [lam, p0, ADAPT_WINDUP * p0, most]
+    notes.append(
+        f"the band's gain is estimated online from the loop's own error "
+        f"(recursive least squares, memory {ADAPT_MEMORY} samples), from 1 "
+        f"within [0, {most:.3g}]: the share compensated moves between 0 "
+        f"and {most * share:.0%} " + ("by default" if adapt is None
+                                      else "as asked")
+        + "; reset() restarts it")
+    return ps
+
+
+def adaptation(num, den, C, post, band_x):
+    """(A, B, C, D) of the process sensitivity PS = P / (1 + C P), the
+    forgetting factor and the initial covariance of the recursive
+    estimate of the band's gain g; None when PS is not strictly proper.
+
+    The regressor is PS applied to the band path's output u_post (the
+    error's sensitivity to g). The initial covariance is 1 / (ADAPT_PRIOR
+    E), with E the regressor's energy over the estimate's memory after
+    one band jump of band_x through `post` (the band path, a state-space
+    system): the prior is worth ADAPT_PRIOR jumps, whatever the units."""
+    PS = ct.feedback(ct.ss(ct.tf(num, den, C.dt)), ct.ss(C))
+    if np.any(np.asarray(PS.D) != 0) or band_x <= 0:
+        return None
+    steps = np.full(ADAPT_MEMORY, band_x)
+    phi = ct.forced_response(PS * post, inputs=steps).outputs
+    energy = float(np.sum(phi ** 2))
+    if not np.isfinite(energy) or energy <= 0:
+        return None
+    arrays = tuple(np.asarray(M, float) for M in (PS.A, PS.B, PS.C, PS.D))
+    return arrays, 1.0 - 1.0 / ADAPT_MEMORY, 1.0 / (ADAPT_PRIOR * energy)

@@ -5,18 +5,25 @@ one int array `ix`, so that a call from Python unboxes five arguments.
 The layout is written by `pack` and read by `_servo_step`:
 
 ``ix``: [preview, lead, n_fb, n_pre, n_post, compensate,
-         off_fb, off_pre, off_post, off_scalar, n_lin, off_lin]
+         off_fb, off_pre, off_post, off_scalar, n_lin, off_lin,
+         n_ps, off_ps, adapt]
 
 - the feedback block C (e -> u_fb), the linear feedforward (r_ahead ->
   u_lin), the pre-inverse block (r_ahead -> w, the backlash output
   wanted) and the post-inverse block (x -> u_post) are state-space
   blocks, each packed as A (n x n), B (n), C (n), D (1);
-- the scalars are [m1, m2, D1, D2, width, mbar, rate, alpha, u0, y0]:
-  x = alpha w / mbar + the band offset of the inverse.
+- the process sensitivity block PS = P / (1 + C P) of the design plant
+  (u_post -> phi, the regressor of the band's gain) is packed the same way;
+- the scalars are [m1, m2, D1, D2, width, mbar, rate, alpha, lam, p0,
+  pmax, gmax, u0, y0]: x = alpha w / mbar + the band offset of the
+  inverse; the band path's output is scaled by g in [0, gmax], estimated
+  online by recursive least squares with forgetting factor lam, initial
+  covariance p0 and largest covariance pmax, when ``adapt`` is set.
 
 The state `s` is laid out as [reference delay line (preview), w delay
 line (lead), feedback states, pre states, x_prev, v_prev, offset, post
-states, linear feedforward states].
+states, linear feedforward states, PS states, g - 1, 1 - P / p0]: all zero
+at rest, where g = 1 and P = p0.
 """
 
 import numba
@@ -25,16 +32,18 @@ import numpy as np
 from .inverse import _inverse_step
 
 #: index of each scalar in the scalar part of p
-_M1, _M2, _D1, _D2, _WIDTH, _MBAR, _RATE, _ALPHA, _U0, _Y0 = range(10)
-NSCALAR = 10
+(_M1, _M2, _D1, _D2, _WIDTH, _MBAR, _RATE, _ALPHA, _LAM, _P0, _PMAX, _GMAX,
+ _U0, _Y0) = range(14)
+NSCALAR = 14
 
 
-def pack(feedback, pre, post, linear, scalars, preview, lead, compensate):
+def pack(feedback, pre, post, linear, sensitivity, scalars, preview, lead,
+         compensate, adapt):
     """Lay out the blocks (each an (A, B, C, D) tuple of arrays) and the
     scalars in (p, ix); return them and the state size."""
     parts, offsets = [], []
     pos = 0
-    for A, B, C, D in (feedback, pre, post, linear):
+    for A, B, C, D in (feedback, pre, post, linear, sensitivity):
         offsets.append(pos)
         n = A.shape[0]
         block = np.concatenate([np.ravel(A), np.ravel(B), np.ravel(C),
@@ -44,10 +53,12 @@ def pack(feedback, pre, post, linear, scalars, preview, lead, compensate):
     parts.append(np.asarray(scalars, dtype=float))
     p = np.ascontiguousarray(np.concatenate(parts), dtype=float)
     sizes = [feedback[0].shape[0], pre[0].shape[0], post[0].shape[0]]
-    n_lin = linear[0].shape[0]
+    n_lin, n_ps = linear[0].shape[0], sensitivity[0].shape[0]
     ix = np.array([preview, lead] + sizes + [int(bool(compensate))]
-                  + offsets[:3] + [pos, n_lin, offsets[3]], dtype=np.int64)
-    nstate = preview + lead + sizes[0] + sizes[1] + 3 + sizes[2] + n_lin
+                  + offsets[:3] + [pos, n_lin, offsets[3], n_ps, offsets[4],
+                                   int(bool(adapt))], dtype=np.int64)
+    nstate = (preview + lead + sizes[0] + sizes[1] + 3 + sizes[2] + n_lin
+              + n_ps + 2)
     return p, ix, nstate
 
 
@@ -117,8 +128,36 @@ def servo_step(p, ix, s, r_ahead, y):
         s[i_bl + 2] += step
         x += s[i_bl + 2]
     u_ff = _block(p, ix[8], n_post, s, i_bl + 3, x)
+    if ix[14]:
+        u_ff *= _adapt(p, ix, s, i_bl + 3 + n_post + ix[10], u_ff,
+                       r_now - yd)
     u_ff += _block(p, ix[11], ix[10], s, i_bl + 3 + n_post, ra)
     return p[sc + _U0] + u_fb + u_ff
+
+
+@numba.njit(cache=True)
+def _adapt(p, ix, s, i_ps, u_post, e):
+    """The band path's gain g(k), after the recursive least-squares step
+    on the error e(k) = r(k) - y(k) with the regressor phi(k) = PS u_post
+    (the error's sensitivity to g; PS is strictly proper, so phi(k) holds
+    u_post up to k - 1 only)."""
+    sc, n_ps = ix[9], ix[12]
+    phi = _block(p, ix[13], n_ps, s, i_ps, u_post)
+    i_g = i_ps + n_ps
+    g, p0 = 1.0 + s[i_g], p[sc + _P0]
+    cov = p0 * (1.0 - s[i_g + 1])
+    lam = p[sc + _LAM]
+    gain = cov * phi / (lam + phi * phi * cov)
+    g += gain * e
+    cov = (cov - gain * phi * cov) / lam
+    if cov > p[sc + _PMAX]:
+        cov = p[sc + _PMAX]
+    if g < 0.0:
+        g = 0.0
+    elif g > p[sc + _GMAX]:
+        g = p[sc + _GMAX]
+    s[i_g], s[i_g + 1] = g - 1.0, 1.0 - cov / p0
+    return g
 
 
 @numba.njit(cache=True)

@@ -24,7 +24,9 @@ A `ServoController` is written from its packed parameters (see the
 compiled kernel, ``_servo_kernel``): the feedback block on the error
 ``r(k) - y(k)``, the pre-inverse block ``r_ahead -> w``, the delay line
 of w, the backlash inverse with its rate-limited band offset, the
-post-inverse block, and the linear feedforward. A block with no states
+post-inverse block (its output scaled by the band's gain, estimated
+online by recursive least squares when the controller adapts), and the
+linear feedforward. A block with no states
 is a gain, written inline; a delay line of length 0 is left out. Its
 operating point (u0, y0) sits in the state, so that
 ``name_reset_at(s, y, u)`` starts a running axis bumplessly like
@@ -60,8 +62,8 @@ _C_KEYWORDS = frozenset(
     'volatile while _Bool _Complex _Imaginary'.split())
 
 #: names of the scalars in the packed parameters (see _servo_kernel)
-_SCALARS = ('m1', 'm2', 'D1', 'D2', 'width', 'mbar', 'rate', 'alpha', 'u0',
-            'y0')
+_SCALARS = ('m1', 'm2', 'D1', 'D2', 'width', 'mbar', 'rate', 'alpha', 'lam',
+            'p0', 'pmax', 'gmax', 'u0', 'y0')
 
 
 def _check_name(name):
@@ -337,6 +339,10 @@ def _servo_parts(ctrl, w):
                          int(ix[8]), int(ix[4]))
     lin = _Block.packed('lin', 'linear feedforward, r_ahead -> u_lin', p,
                         int(ix[11]), int(ix[10]))
+    adapts = bool(ix[14])
+    ps = _Block.packed('ps', "process sensitivity P / (1 + C P), the band "
+                       "path's output -> the regressor of its gain", p,
+                       int(ix[13]), int(ix[12]))
     T, n = w.T, w.name
     members = []
     if preview:
@@ -351,9 +357,12 @@ def _servo_parts(ctrl, w):
         members += [(f"{T} x_prev;", 'backlash inverse: x(k-1)'),
                     (f"{T} v_prev;", 'backlash inverse: v_hat(k-1)'),
                     (f"{T} offset;", 'band offset (rate limited)')]
-    for b in (post, lin):
+    for b in (post, lin) + ((ps,) if adapts else ()):
         if b.n:
             members.append((f"{T} {b.tag}[{b.n}];", f"{b.tag} block"))
+    if adapts:
+        members += [(f"{T} band_dg;", "the band's gain g, less 1"),
+                    (f"{T} band_q;", 'its covariance: 1 - cov / p0')]
     members += [(f"{T} u0;", 'operating point: u at the model\'s zero'),
                 (f"{T} y0;", 'operating point: y at the model\'s zero')]
 
@@ -364,7 +373,7 @@ def _servo_parts(ctrl, w):
                    'post blocks and the', '   scalars of the inverse '
                    'path are zero gains, kept so that the step does what',
                    '   the compiled Python step does. */', '']
-    for b in (fb, pre, post, lin):
+    for b in (fb, pre, post, lin) + ((ps,) if adapts else ()):
         consts += b.constants(w) + ['']
     consts += ['/* Feedforward scalars. */',
                w.const('mbar', sc['mbar'], 'mean backlash slope'),
@@ -373,8 +382,16 @@ def _servo_parts(ctrl, w):
     if compensate and sc['rate'] > 0:
         consts.append(w.const('rate', sc['rate'],
                               'largest change of the band offset a sample'))
+    if adapts:
+        consts += [
+            "/* Online estimate of the band's gain (recursive least "
+            "squares). */",
+            w.const('lam', sc['lam'], 'forgetting factor'),
+            w.const('p0', sc['p0'], 'initial covariance'),
+            w.const('pmax', sc['pmax'], 'largest covariance'),
+            w.const('gmax', sc['gmax'], 'largest gain')]
     functions = []
-    nmax = max(b.n for b in (fb, pre, post, lin))
+    nmax = max(b.n for b in (fb, pre, post, lin, ps))
     if nmax:
         functions.append(_block_function(w, nmax))
     if preview or lead:
@@ -411,8 +428,28 @@ def _servo_parts(ctrl, w):
         body += ['        s->offset += step;',
                  '        x += s->offset;',
                  '    }']
-    body += [f"    u_ff = {post.call(w, 'x')};",
-             f"    u_ff += {lin.call(w, 'ra')};",
+    body += [f"    u_ff = {post.call(w, 'x')};"]
+    if adapts:
+        one, zero = w.num(1.0), w.num(0.0)
+        body += ["    {                       /* the band's gain, online */",
+                 f"        {T} phi, g, cov, gain;",
+                 f"        phi = {ps.call(w, 'u_ff')};",
+                 f"        g = {one} + s->band_dg;",
+                 f"        cov = {n}_p0 * ({one} - s->band_q);",
+                 f"        gain = cov * phi / ({n}_lam + phi * phi * cov);",
+                 '        g += gain * (r_now - yd);',
+                 f"        cov = (cov - gain * phi * cov) / {n}_lam;",
+                 f"        if (cov > {n}_pmax)",
+                 f"            cov = {n}_pmax;",
+                 f"        if (g < {zero})",
+                 f"            g = {zero};",
+                 f"        else if (g > {n}_gmax)",
+                 f"            g = {n}_gmax;",
+                 f"        s->band_dg = g - {one};",
+                 f"        s->band_q = {one} - cov / {n}_p0;",
+                 '        u_ff *= g;',
+                 '    }']
+    body += [f"    u_ff += {lin.call(w, 'ra')};",
              '    return s->u0 + u_fb + u_ff;']
     signature = f"{T} {n}_step({n}_state *s, {T} r_ahead, {T} y)"
     reset = [f"    s->u0 = {n}_u0;", f"    s->y0 = {n}_y0;"]

@@ -37,6 +37,15 @@ compensated, since the seen play is smaller than the band, and the jump
 is spread over ``jump_samples`` samples, started half of them early, so
 that :math:`L_1^{-1}` (a differentiator when L1 integrates) does not turn
 it into a one-sample spike that saturates the drive.
+
+How much of the band: online
+----------------------------
+The play the loop meets is not the band identified. For an identified
+sandwich the controller estimates the band path's gain from its own
+error, by recursive least squares: the regressor is the band path's
+output through the design plant's process sensitivity :math:`P/(1+CP)`,
+the error's sensitivity to that gain. It is deterministic, bounded, and
+``reset()`` restarts it (``adapt``).
 """
 
 import math
@@ -220,8 +229,10 @@ class ServoController(ct.NonlinearIOSystem):
         self.__dict__.update({k: v for k, v in design.items()
                               if not k.startswith('_')})
         p, ix, nstate = pack(design['_fb'], design['_pre'], design['_post'],
-                             design['_linear'], design['_scalars'], design['preview'],
-                             design['_lead'], design['compensates'])
+                             design['_linear'], design['_ps'],
+                             design['_scalars'], design['preview'],
+                             design['_lead'], design['compensates'],
+                             design['adapts'])
         self._p, self._ix = p, ix
         self._s = np.zeros(nstate)
         super().__init__(self._update, self._output,
@@ -273,6 +284,13 @@ class ServoController(ct.NonlinearIOSystem):
         """A copy of the memory `step` updates."""
         return self._s.copy()
 
+    @property
+    def band_gain(self):
+        """The gain g on the band path now (1 at rest; moved online when
+        `adapts`): the share of the band compensated is
+        ``band_fraction * band_gain``."""
+        return 1.0 + float(self._s[-2]) if self.adapts else 1.0
+
     # --- python-control system ----------------------------------------
     def _update(self, t, x, u, params=None):
         s = np.array(x, dtype=float)
@@ -299,7 +317,8 @@ class ServoController(ct.NonlinearIOSystem):
         if self.compensates:
             head += (f", band_fraction={self.band_fraction:g}, "
                      f"smoothing={self.smoothing:.3g}, "
-                     f"jump_samples={self.jump_samples}")
+                     f"jump_samples={self.jump_samples}, "
+                     f"adapts={self.adapts}")
         return head + ")\n" + "\n".join(f"  - {n}" for n in self.notes)
 
     __str__ = __repr__
@@ -398,8 +417,8 @@ def _jump_samples(L1_num, L1_den, band_x, dt, cap=2.0, longest=50):
 def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                      max_preview=20, band_fraction=None, smoothing=None,
                      jump_samples=None, feedback_scale=1.0,
-                     feedforward_from='auto', operating_point=(0.0, 0.0),
-                     name=None):
+                     feedforward_from='auto', adapt=None,
+                     operating_point=(0.0, 0.0), name=None):
     r"""Design a servo controller from an identified or known model.
 
     The feedback is a PID on the model's linear part (a `SandwichSystem`'s
@@ -456,7 +475,20 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         far enough out for their anticausal series to fit in
         `max_preview` samples, aside) and the sandwich fits at least 2 points
         better than the baseline (the play then distorts the baseline's
-        dynamics), with half the band compensated.
+        dynamics).
+    adapt : bool, optional
+        Whether the band's gain g (the share compensated is
+        ``band_fraction * g``, g = 1 at rest) is estimated online from the
+        loop's own error, by recursive least squares on the regressor
+        :math:`PS\,u_{band}` (the error's sensitivity to g through the
+        design plant's process sensitivity), with a memory of 2,000
+        samples, a prior worth ten band jumps, and g in [0, 3] (the share
+        at most 1); ``ctrl.band_gain`` reads it and ``reset()`` restarts
+        it. By default it runs for an identification result of a sandwich
+        with the default share; True asks for it with a share given by
+        hand, False turns it off. It reads only r and the measured y, so a load that
+        coasts into the gap (the play seen smaller than the band) and a
+        play larger than identified both move it the right way.
     feedback_scale : float, optional
         Factor on the designed PID gains (default 1), for detuning or
         sweeps; the scaled loop is checked like the designed one.
@@ -568,7 +600,11 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     comp = isinstance(model, SandwichSystem) and feedforward is not None
     pre = post = zero
     lead, jump, band_fraction_out, smoothing_out = 0, 0, 0.0, 0.0
-    scal = [1, 1, 0, 0, 0, 1, 0, 0, u0, y0]
+    ps, adapts = zero, False
+    if adapt not in (None, True, False):
+        raise ValueError(f"adapt must be None (automatic), True or False; "
+                         f"got {adapt!r}")
+    scal = [1, 1, 0, 0, 0, 1, 0, 0, 1, 0, 0, 1, u0, y0]
     if feedforward is None:
         preview, lin_ff = 0, zero
         notes.append("no feedforward: feedback only")
@@ -646,7 +682,13 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         slopes = (co['m1'], co['m2']) if exact else (mbar, mbar)
         scal = [*slopes, band_fraction_out * co['D1'],
                 band_fraction_out * co['D2'], smoothing_out, mbar,
-                band_x / jump if jump > 1 else 0.0, float(exact), u0, y0]
+                band_x / jump if jump > 1 else 0.0, float(exact), 1, 0, 0,
+                1, u0, y0]
+        got = sd.band_adaptation(adapt, num, den, C, post, band_x,
+                                 band_fraction_out, exact, band_by_default,
+                                 scal, notes)
+        if got is not None:
+            ps, adapts = got, True
         notes.append(
             f"backlash inverse on the reference: {band_fraction_out:.0%} of "
             f"the model's band (D1 + D2 = {co['D1'] + co['D2']:.4g} in x) "
@@ -661,7 +703,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     band_fraction, smoothing = band_fraction_out, smoothing_out
     design.update(preview=int(preview), band_fraction=float(band_fraction),
                   smoothing=float(smoothing), jump_samples=int(jump),
-                  compensates=bool(comp), notes=notes, _pre=pre, _post=post,
+                  compensates=bool(comp), adapts=bool(adapts), _ps=ps,
+                  notes=notes, _pre=pre, _post=post,
                   _linear=lin_ff,
                   _lead=int(lead), _scalars=np.array(scal, float))
     if result is not None and not getattr(result, 'success', True):
@@ -675,6 +718,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         ctrl.band_fraction = 0.0
         ctrl._design['band_fraction'] = 0.0
         ctrl._design['_scalars'][2:4] = 0.0
+        ctrl._ix[14] = 0
+        ctrl.adapts = ctrl._design['adapts'] = False
         notes.append(f"compensation turned off: with it, tracking on the "
                      f"identified model itself was over {HARM:g} times "
                      f"worse than without (pass band_fraction to force it)")
