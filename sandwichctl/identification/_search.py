@@ -20,7 +20,10 @@ one line in the step that uses it; the progress bar counts what the steps
 say they will run (`Search.planned`).
 """
 
+import dataclasses
+
 import numpy as np
+from scipy.signal import lfilter
 
 from ._held_out import step13_held_out
 from ._lm import lm
@@ -29,7 +32,8 @@ from ._predictor import oe_signals
 from ._problem import Problem, STABILITY_MARGIN
 from ._smooth import smooth_refine
 from ._starts import (splits, opened, random_start, recursive_start,
-                      relocations, perturb, unsplit, held_starts, holds)
+                      reintegrated, relocations, perturb, unsplit,
+                      held_starts, holds)
 from .linear import oe_transfer_function
 from .._checks import progress_bar
 
@@ -46,6 +50,10 @@ RELOCATE_KEEP = 2
 RELOCATE_REFIT_ITER = 20
 #: Where the integrator of a model goes when it restarts a fit without one.
 UNINTEGRATED_POLE = 0.99
+#: Step 5 with an integrator in L2: the pole of the filter (1 - q^-1) /
+#: (1 - rho q^-1) the output is passed through, to search it without the
+#: drift (the integrator of L2 becomes a pole at rho).
+DRIFT_FILTER_POLE = 0.95
 
 
 def search(task):
@@ -79,6 +87,15 @@ class Task:
                        dt=self.dt, name=self.name, offsets=self.offsets,
                        inits=self.inits,
                        minimum_phase=self.opt.minimum_phase)
+
+    def filtered(self, rho):
+        """The task on the outputs filtered by (1 - q^-1) / (1 - rho
+        q^-1), each from rest (step 5), without a progress bar, output
+        offsets (a constant is filtered out), relocations or hops (the
+        model it gives goes through them on the outputs themselves)."""
+        ys = [lfilter([1.0, -1.0], [1.0, -rho], part) for part in self.y]
+        opt = dataclasses.replace(self.opt, relocate=0, hops=0)
+        return Task(self.u, ys, self.orders, opt, dt=self.dt)
 
     def fit_linear(self, scaled, k):
         """The linear output-error fit with k integrators on `scaled`."""
@@ -457,8 +474,10 @@ class Search:
 
     def step5_other_basins(self, groups, screened):
         """Step 5: series-parallel runs from every split opened widest,
-        from the best screened starts and from random structures, and the
-        recursive estimator's start: [(sign, phi)]."""
+        from the best screened starts and from random structures, the
+        recursive estimator's start and, with an integrator in L2, the
+        search on the output without its drift (`filtered_start`):
+        [(sign, phi)]."""
         opt, sign, others = self.opt, self.sign, []
         if opt.sp_iter:
             rng = np.random.default_rng(opt.seed)
@@ -475,8 +494,30 @@ class Search:
                 self.tick()
         if not (self.k or self.task.orders['na'] == 0):
             others += recursive_start(self.probs[sign], self.task.orders)
+        if self.split[1]:
+            others += self.filtered_start()
         self.tick()
         return others
+
+    def filtered_start(self):
+        """Step 5 with an integrator in L2: the search (`Task.filtered`:
+        steps 4 to 8, 11 and 12) on the output filtered by (1 - q^-1) /
+        (1 - rho q^-1) (`DRIFT_FILTER_POLE`), on which that integrator is
+        a pole at rho, and its model with that pole back at z = 1
+        (`reintegrated`): [(sign, phi)] or []."""
+        rho = DRIFT_FILTER_POLE
+        sub = self.task.filtered(rho)
+        i1, i2 = self.split
+        lin = sub.fit_linear(step1_units(sub), self.k - 1)
+        prob_f, best_f, _ = Search(sub, lin, (i1, i2 - 1)).run()
+        s = best_f['sign']
+        if s not in self.probs:
+            self.probs[s] = self.task.problem(self.split, s)
+            self._head_all()
+        prob = self.probs[s]
+        phi = reintegrated(prob.st, prob_f.st, best_f['phi'], rho,
+                           prob_f.sy / prob.sy)
+        return [] if phi is None else [(s, self.extend(s, phi))]
 
     def screen(self, cands, iterations, tick=True):
         """A few LM iterations from each (sign, phi) on the leading

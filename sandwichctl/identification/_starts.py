@@ -10,7 +10,10 @@ kind is one function here, in the order of the search's steps
   poles and zeros, gives one exact sandwich for every assignment of its
   poles and zeros to L1 and L2 (complex pairs kept together), each with
   the linear fit's cost; `opened` opens their backlash;
-- step 5, `random_start` and `recursive_start`: other basins;
+- step 5, `random_start`, `recursive_start` and `reintegrated`: other
+  basins (the last maps the model of the search on the output filtered
+  by (1 - q^-1) / (1 - rho q^-1), an integrator of L2 then a pole at rho,
+  back to the integrator);
 - step 9, `relocations`: one root of L1 moved across the disk. The cost
   has local minima that differ from the global one in a single root of
   L1 (a real pole sitting on a copy of one of L2's poles, a zero on the
@@ -383,6 +386,26 @@ def recursive_start(prob, orders):
     if not st.stable(phi):
         return []
     return [(prob.sign, phi)]
+
+
+def reintegrated(st, st_f, phi_f, rho, gain):
+    """The model phi_f of the filtered structure `st_f` (one integrator of
+    L2 fewer, fitted to the output filtered by (1 - q^-1) / (1 - rho
+    q^-1)) as a start of `st`: its real pole of L2 nearest `rho` put back
+    at z = 1, the slopes times `gain` (the ratio of the two outputs'
+    scales). None if that pole is complex or the start is not stable."""
+    nc = st.o[2]
+    theta = st_f.theta(phi_f)
+    with np.errstate(all='ignore'):
+        roots = np.roots(np.r_[1.0, theta[:nc]])
+    near = int(np.argmin(np.abs(roots - rho)))
+    if not abs(roots[near].imag) <= 1e-8 * max(1.0, abs(roots[near])):
+        return None
+    roots[near] = 1.0
+    theta[:nc] = _coefficients(roots)
+    theta[st.im_theta:st.im_theta + 2] *= gain
+    phi = st.phi(theta)
+    return phi if st.stable(phi) else None
 
 
 def perturb(st, phi, rng, spread, m_min=1e-9, tries=20):

@@ -13,7 +13,10 @@ the linear model that the sandwich nests:
    complex pairs together; each assignment, with m1 = m2 = the linear
    gain and D1 = D2 = 0, is a sandwich with exactly the linear fit.
 3. From each, the backlash is opened from a few small widths (and kept
-   closed); with series-parallel and random starts, short
+   closed); with series-parallel and random starts (and, with an
+   integrator in L2, the model of the search on the output filtered by
+   (1 - q^-1) / (1 - 0.95 q^-1), without the drift the play puts on the
+   integrator), short
    Levenberg-Marquardt runs on the leading samples screen them and the
    best ones are refined to convergence on all the data.
 4. The best is polished: a path through smoothed backlashes (`_smooth`:
