@@ -441,3 +441,27 @@ def test_adapt_is_refused_where_there_is_nothing_to_adapt():
     assert not sw.servo_controller(result, band_fraction=0.25).adapts
     assert sw.servo_controller(result, band_fraction=0.25, adapt=True).adapts
     assert not sw.servo_controller(plant).adapts
+
+
+def test_the_blend_moves_towards_the_feedforward_that_fits_the_plant():
+    """A baseline whose gain is 30 % off, chosen for the feedforward (the
+    sandwich fits only 1 point better): the share of the sandwich's own
+    feedforward, estimated online, moves towards it, and the loop tracks
+    better than with both estimates off."""
+    import types
+    plant, _ = _mismatched(1.0)
+    result = types.SimpleNamespace(model=plant, success=True, fit=95.0,
+                                   linear=dict(model=1.3 * plant.L1 *
+                                               plant.L2, fit=94.0))
+    r = sw.servo_reference(1e-3, 5.0)
+    ctrl = sw.servo_controller(result)
+    fixed = sw.servo_controller(result, adapt=False)
+    assert ctrl.blends and not fixed.blends
+    assert any("baseline" in n and "inverts the baseline" in n
+               for n in ctrl.notes)
+    err = [np.sqrt(np.mean((r - sw.closed_loop_response(
+        plant, r, c).outputs[0]) ** 2)) for c in (fixed, ctrl)]
+    assert ctrl.feedforward_blend > 0.5
+    assert err[1] < 0.8 * err[0]
+    ctrl.reset()
+    assert ctrl.feedforward_blend == 0.0

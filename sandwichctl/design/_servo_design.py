@@ -421,3 +421,87 @@ def adaptation(num, den, C, post, band_x):
         return None
     arrays = tuple(np.asarray(M, float) for M in (PS.A, PS.B, PS.C, PS.D))
     return arrays, 1.0 - 1.0 / ADAPT_MEMORY, 1.0 / (ADAPT_PRIOR * energy)
+
+
+#: the prior of the blend is worth one `servo_reference` run travelling
+#: this many of the model's bands
+BLEND_TRAVEL = 5.0
+
+
+def blend(ps, other, chosen, model, scal, notes):
+    """Whether the share b of the other linear feedforward is estimated
+    online beside the band's gain, and its prior in `scal`: the inverse
+    of the energy of its regressor PS (other - chosen) over
+    `servo_reference` travelling 20 of the model's bands (a prior worth
+    one such run, whatever the units). `ps`, `other` and `chosen` are
+    (A, B, C, D) arrays."""
+    from .references import servo_reference
+    co = model.coefficients
+    num, den = model.L2.num[0][0], model.L2.den[0][0]
+    with np.errstate(divide='ignore', invalid='ignore'):
+        gain = abs(np.polyval(num, 1.0) / np.polyval(den, 1.0))
+    band = 0.5 * (co['m1'] + co['m2']) * (co['D1'] + co['D2']) * gain
+    travel = BLEND_TRAVEL * band if np.isfinite(band) and band > 0 else 1.0
+    step = model.dt if model.dt is not True and model.dt <= 0.01 else 0.01
+    sys_dt = model.dt
+    diff = ct.ss(*other, sys_dt) - ct.ss(*chosen, sys_dt)
+    r = servo_reference(step, travel)
+    phi = ct.forced_response(ct.ss(*ps, sys_dt) * diff, inputs=r).outputs
+    energy = float(np.sum(phi ** 2))
+    if not np.isfinite(energy) or energy <= 0:
+        return False
+    scal[12:14] = [1.0 / energy, ADAPT_WINDUP / energy]
+    notes.append("the linear feedforward's share of the other model (the "
+                 "baseline or the sandwich's mbar L1 L2) is estimated "
+                 "online too, from 0 within [0, 1]")
+    return True
+
+
+#: the sandwich's linear part drives the feedforward of a non-integrating
+#: axis when the sandwich fits this many points better than the linear
+#: baseline: the play then distorts the baseline's dynamics
+MODEL_FF_GAP = 2.0
+
+
+def outside(zeros, max_preview):
+    """Which zeros lie outside the unit circle where the preview inverse
+    can keep only their DC gain (sampling zeros on the negative real axis
+    it may keep so)."""
+    return np.array([abs(zj) >= 1 and np.real(zj) >= RINGING
+                     and series_length(zj) > max_preview
+                     for zj in zeros], bool)
+
+
+def feedforward_source(choice, result, lin_model, integrating, zeros,
+                        max_preview):
+    """Whether the feedforward inverts the sandwich's own mbar L1 L2
+    (else the linear baseline), and a note saying why."""
+    if choice not in ('auto', 'model', 'baseline'):
+        raise ValueError(f"feedforward_from must be 'auto', 'model' or "
+                         f"'baseline'; got {choice!r}")
+    if not isinstance(lin_model, ct.TransferFunction):
+        if choice == 'baseline':
+            raise ValueError("feedforward_from='baseline' needs an "
+                             "identification result with a linear "
+                             "baseline (sw.identify's result)")
+        return True, "linear part designed on the model's mbar L1 L2"
+    gap = result.fit - result.linear['fit']
+    if choice == 'auto':
+        # zeros outside the unit circle that the preview inverse can only
+        # keep by their DC gain (sampling zeros on the negative real axis
+        # it may keep so)
+        far = outside(zeros, max_preview)
+        use = not integrating and gap >= MODEL_FF_GAP and not far.any()
+        why = (f"the sandwich fits {gap:.1f} points better than the "
+               f"baseline (" + ("at least " if gap >= MODEL_FF_GAP
+                                else "less than ") + f"{MODEL_FF_GAP:g})"
+               + (", but L1 integrates" if integrating else "")
+               + (f", but L1 L2 has zeros outside the unit circle at "
+                  f"{_fmt_roots(zeros[far])}" if far.any()
+                  else ""))
+    else:
+        use, why = choice == 'model', "as asked"
+    return use, ("feedback designed on the result's linear baseline fit; "
+                 "feedforward inverts the " + ("sandwich's mbar L1 L2"
+                                               if use else "baseline")
+                 + f": {why}")

@@ -22,8 +22,10 @@ The layout is written by `pack` and read by `_servo_step`:
 
 The state `s` is laid out as [reference delay line (preview), w delay
 line (lead), feedback states, pre states, x_prev, v_prev, offset, post
-states, linear feedforward states, PS states, g - 1, 1 - P / p0]: all zero
-at rest, where g = 1 and P = p0.
+states, linear feedforward states, PS states, g - 1, 1 - P / p0, the
+other feedforward's states, and when it is blended, the second PS states,
+b, 1 - P_bb / pb0, P_bg / pb0]: all zero at rest, where g = 1, b = 0 and
+the covariance is the prior's.
 """
 
 import numba
@@ -33,17 +35,17 @@ from .inverse import _inverse_step
 
 #: index of each scalar in the scalar part of p
 (_M1, _M2, _D1, _D2, _WIDTH, _MBAR, _RATE, _ALPHA, _LAM, _P0, _PMAX, _GMAX,
- _U0, _Y0) = range(14)
-NSCALAR = 14
+ _PB0, _PBMAX, _U0, _Y0) = range(16)
+NSCALAR = 16
 
 
-def pack(feedback, pre, post, linear, sensitivity, scalars, preview, lead,
-         compensate, adapt):
+def pack(feedback, pre, post, linear, sensitivity, other, scalars, preview,
+         lead, compensate, adapt, blend):
     """Lay out the blocks (each an (A, B, C, D) tuple of arrays) and the
     scalars in (p, ix); return them and the state size."""
     parts, offsets = [], []
     pos = 0
-    for A, B, C, D in (feedback, pre, post, linear, sensitivity):
+    for A, B, C, D in (feedback, pre, post, linear, sensitivity, other):
         offsets.append(pos)
         n = A.shape[0]
         block = np.concatenate([np.ravel(A), np.ravel(B), np.ravel(C),
@@ -54,12 +56,20 @@ def pack(feedback, pre, post, linear, sensitivity, scalars, preview, lead,
     p = np.ascontiguousarray(np.concatenate(parts), dtype=float)
     sizes = [feedback[0].shape[0], pre[0].shape[0], post[0].shape[0]]
     n_lin, n_ps = linear[0].shape[0], sensitivity[0].shape[0]
+    n_other = other[0].shape[0]
     ix = np.array([preview, lead] + sizes + [int(bool(compensate))]
                   + offsets[:3] + [pos, n_lin, offsets[3], n_ps, offsets[4],
-                                   int(bool(adapt))], dtype=np.int64)
+                                   int(bool(adapt)), n_other, offsets[5],
+                                   int(bool(blend))], dtype=np.int64)
     nstate = (preview + lead + sizes[0] + sizes[1] + 3 + sizes[2] + n_lin
-              + n_ps + 2)
+              + n_ps + 2 + n_other + (n_ps + 3 if blend else 0))
     return p, ix, nstate
+
+
+def adapt_index(ix):
+    """Where g - 1 and the blend b sit in the state."""
+    i_g = (ix[0] + ix[1] + ix[2] + ix[3] + 3 + ix[4] + ix[10] + ix[12])
+    return int(i_g), int(i_g + 2 + ix[15] + (ix[12] if ix[17] else 0))
 
 
 @numba.njit(cache=True)
@@ -128,9 +138,19 @@ def servo_step(p, ix, s, r_ahead, y):
         s[i_bl + 2] += step
         x += s[i_bl + 2]
     u_ff = _block(p, ix[8], n_post, s, i_bl + 3, x)
+    i_ps = i_bl + 3 + n_post + ix[10]
+    if ix[17]:
+        # the band's gain and the blend towards the other feedforward
+        u_lin = _block(p, ix[11], ix[10], s, i_bl + 3 + n_post, ra)
+        i_o = i_ps + ix[12] + 2
+        d = _block(p, ix[16], ix[15], s, i_o, ra) - u_lin
+        g, b = _blend(p, ix, s, i_ps, i_o + ix[15], u_ff, d, r_now - yd)
+        u_ff *= g
+        u_ff += u_lin
+        u_ff += b * d
+        return p[sc + _U0] + u_fb + u_ff
     if ix[14]:
-        u_ff *= _adapt(p, ix, s, i_bl + 3 + n_post + ix[10], u_ff,
-                       r_now - yd)
+        u_ff *= _adapt(p, ix, s, i_ps, u_ff, r_now - yd)
     u_ff += _block(p, ix[11], ix[10], s, i_bl + 3 + n_post, ra)
     return p[sc + _U0] + u_fb + u_ff
 
@@ -158,6 +178,51 @@ def _adapt(p, ix, s, i_ps, u_post, e):
         g = p[sc + _GMAX]
     s[i_g], s[i_g + 1] = g - 1.0, 1.0 - cov / p0
     return g
+
+
+@numba.njit(cache=True)
+def _blend(p, ix, s, i_ps, i_ps2, u_post, d, e):
+    """(g, b) after the recursive least-squares step on e(k) with the
+    regressors PS d (d: the other feedforward less the chosen one; b its
+    share) and PS u_post (g: the band path's gain)."""
+    sc, n_ps = ix[9], ix[12]
+    phi_g = _block(p, ix[13], n_ps, s, i_ps, u_post)
+    phi_b = _block(p, ix[13], n_ps, s, i_ps2, d)
+    i_g, i_b = i_ps + n_ps, i_ps2 + n_ps
+    p0g, p0b = p[sc + _P0], p[sc + _PB0]
+    g, b = 1.0 + s[i_g], s[i_b]
+    pgg = p0g * (1.0 - s[i_g + 1])
+    pbb = p0b * (1.0 - s[i_b + 1])
+    pbg = p0b * s[i_b + 2]
+    lam = p[sc + _LAM]
+    hb = pbb * phi_b + pbg * phi_g
+    hg = pbg * phi_b + pgg * phi_g
+    den = lam + phi_b * hb + phi_g * hg
+    kb, kg = hb / den, hg / den
+    b += kb * e
+    g += kg * e
+    pbb = (pbb - kb * hb) / lam
+    pbg = (pbg - kb * hg) / lam
+    pgg = (pgg - kg * hg) / lam
+    # a bound on a variance scales the covariance by the same ratio (the
+    # matrix stays positive semidefinite)
+    if pbb > p[sc + _PBMAX]:
+        pbg *= p[sc + _PBMAX] / pbb
+        pbb = p[sc + _PBMAX]
+    if pgg > p[sc + _PMAX]:
+        pbg *= p[sc + _PMAX] / pgg
+        pgg = p[sc + _PMAX]
+    if g < 0.0:
+        g = 0.0
+    elif g > p[sc + _GMAX]:
+        g = p[sc + _GMAX]
+    if b < 0.0:
+        b = 0.0
+    elif b > 1.0:
+        b = 1.0
+    s[i_g], s[i_g + 1] = g - 1.0, 1.0 - pgg / p0g
+    s[i_b], s[i_b + 1], s[i_b + 2] = b, 1.0 - pbb / p0b, pbg / p0b
+    return g, b
 
 
 @numba.njit(cache=True)

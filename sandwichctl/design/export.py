@@ -44,6 +44,7 @@ import numpy as np
 
 from .compensator import SandwichCompensator
 from .servo import ServoController
+from ._export_adapt import blend_body
 from ._servo_kernel import NSCALAR
 from ..model.sandwich import SandwichSystem
 
@@ -63,7 +64,7 @@ _C_KEYWORDS = frozenset(
 
 #: names of the scalars in the packed parameters (see _servo_kernel)
 _SCALARS = ('m1', 'm2', 'D1', 'D2', 'width', 'mbar', 'rate', 'alpha', 'lam',
-            'p0', 'pmax', 'gmax', 'u0', 'y0')
+            'p0', 'pmax', 'gmax', 'pb0', 'pbmax', 'u0', 'y0')
 
 
 def _check_name(name):
@@ -339,7 +340,10 @@ def _servo_parts(ctrl, w):
                          int(ix[8]), int(ix[4]))
     lin = _Block.packed('lin', 'linear feedforward, r_ahead -> u_lin', p,
                         int(ix[11]), int(ix[10]))
-    adapts = bool(ix[14])
+    adapts, blends = bool(ix[14]), bool(ix[17])
+    oth = _Block.packed('oth', 'the other linear feedforward, r_ahead -> '
+                        'u_other (blended in online)', p, int(ix[16]),
+                        int(ix[15]))
     ps = _Block.packed('ps', "process sensitivity P / (1 + C P), the band "
                        "path's output -> the regressor of its gain", p,
                        int(ix[13]), int(ix[12]))
@@ -363,6 +367,14 @@ def _servo_parts(ctrl, w):
     if adapts:
         members += [(f"{T} band_dg;", "the band's gain g, less 1"),
                     (f"{T} band_q;", 'its covariance: 1 - cov / p0')]
+    if blends:
+        for tag, size, what in (('oth', oth.n, 'oth block'),
+                                ('ps2', ps.n, 'ps block on u_other - u_lin')):
+            if size:
+                members.append((f"{T} {tag}[{size}];", what))
+        members += [(f"{T} blend;", "the other feedforward's share b"),
+                     (f"{T} blend_q;", "its variance: 1 - var / pb0"),
+                     (f"{T} blend_c;", "its covariance with g, over pb0")]
     members += [(f"{T} u0;", 'operating point: u at the model\'s zero'),
                 (f"{T} y0;", 'operating point: y at the model\'s zero')]
 
@@ -373,7 +385,8 @@ def _servo_parts(ctrl, w):
                    'post blocks and the', '   scalars of the inverse '
                    'path are zero gains, kept so that the step does what',
                    '   the compiled Python step does. */', '']
-    for b in (fb, pre, post, lin) + ((ps,) if adapts else ()):
+    for b in ((fb, pre, post, lin) + ((ps,) if adapts else ())
+              + ((oth,) if blends else ())):
         consts += b.constants(w) + ['']
     consts += ['/* Feedforward scalars. */',
                w.const('mbar', sc['mbar'], 'mean backlash slope'),
@@ -390,8 +403,11 @@ def _servo_parts(ctrl, w):
             w.const('p0', sc['p0'], 'initial covariance'),
             w.const('pmax', sc['pmax'], 'largest covariance'),
             w.const('gmax', sc['gmax'], 'largest gain')]
+    if blends:
+        consts += [w.const('pb0', sc['pb0'], "the blend's initial variance"),
+                   w.const('pbmax', sc['pbmax'], 'its largest variance')]
     functions = []
-    nmax = max(b.n for b in (fb, pre, post, lin, ps))
+    nmax = max(b.n for b in (fb, pre, post, lin, ps, oth))
     if nmax:
         functions.append(_block_function(w, nmax))
     if preview or lead:
@@ -429,7 +445,9 @@ def _servo_parts(ctrl, w):
                  '        x += s->offset;',
                  '    }']
     body += [f"    u_ff = {post.call(w, 'x')};"]
-    if adapts:
+    if blends:
+        body += blend_body(w, ps, lin, oth)
+    elif adapts:
         one, zero = w.num(1.0), w.num(0.0)
         body += ["    {                       /* the band's gain, online */",
                  f"        {T} phi, g, cov, gain;",
@@ -449,8 +467,9 @@ def _servo_parts(ctrl, w):
                  f"        s->band_q = {one} - cov / {n}_p0;",
                  '        u_ff *= g;',
                  '    }']
-    body += [f"    u_ff += {lin.call(w, 'ra')};",
-             '    return s->u0 + u_fb + u_ff;']
+    if not blends:
+        body += [f"    u_ff += {lin.call(w, 'ra')};"]
+    body += ['    return s->u0 + u_fb + u_ff;']
     signature = f"{T} {n}_step({n}_state *s, {T} r_ahead, {T} y)"
     reset = [f"    s->u0 = {n}_u0;", f"    s->y0 = {n}_y0;"]
     return members, consts, functions, signature, body, reset

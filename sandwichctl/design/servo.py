@@ -44,8 +44,10 @@ The play the loop meets is not the band identified. For an identified
 sandwich the controller estimates the band path's gain from its own
 error, by recursive least squares: the regressor is the band path's
 output through the design plant's process sensitivity :math:`P/(1+CP)`,
-the error's sensitivity to that gain. It is deterministic, bounded, and
-``reset()`` restarts it (``adapt``).
+the error's sensitivity to that gain. The share of the other linear
+model's feedforward (the baseline's or the sandwich's) is estimated with
+it. Both are deterministic and bounded, and ``reset()`` restarts them
+(``adapt``).
 """
 
 import math
@@ -55,7 +57,8 @@ import numpy as np
 import control as ct
 
 from . import _servo_design as sd
-from ._servo_kernel import pack, servo_step, servo_run, NSCALAR
+from ._servo_kernel import (pack, servo_step, servo_run, adapt_index,
+                            NSCALAR)
 from .loop import servo_loop, ss_arrays
 from .references import servo_reference
 from ..model.sandwich import SandwichSystem
@@ -76,10 +79,6 @@ BAND_FRACTION_INTEGRATING = 0.1
 #: drive whose load coasts far into the gap (random drive 26) it made the
 #: loop 1.20 times the linear design's error, a quarter 1.02
 BAND_FRACTION_MODEL = 0.25
-#: the sandwich's linear part drives the feedforward of a non-integrating
-#: axis when the sandwich fits this many points better than the linear
-#: baseline: the play then distorts the baseline's dynamics
-MODEL_FF_GAP = 2.0
 #: default smoothing width of the inverse, as a share of the band (in v)
 SMOOTHING = 0.02
 
@@ -230,9 +229,10 @@ class ServoController(ct.NonlinearIOSystem):
                               if not k.startswith('_')})
         p, ix, nstate = pack(design['_fb'], design['_pre'], design['_post'],
                              design['_linear'], design['_ps'],
-                             design['_scalars'], design['preview'],
-                             design['_lead'], design['compensates'],
-                             design['adapts'])
+                             design['_other'], design['_scalars'],
+                             design['preview'], design['_lead'],
+                             design['compensates'], design['adapts'],
+                             design['blends'])
         self._p, self._ix = p, ix
         self._s = np.zeros(nstate)
         super().__init__(self._update, self._output,
@@ -289,7 +289,16 @@ class ServoController(ct.NonlinearIOSystem):
         """The gain g on the band path now (1 at rest; moved online when
         `adapts`): the share of the band compensated is
         ``band_fraction * band_gain``."""
-        return 1.0 + float(self._s[-2]) if self.adapts else 1.0
+        return (1.0 + float(self._s[adapt_index(self._ix)[0]])
+                if self.adapts else 1.0)
+
+    @property
+    def feedforward_blend(self):
+        """The share b of the other linear feedforward now (0 at rest;
+        moved online when `blends`): u_lin = (1 - b) F + b F_other, with F
+        the one `feedforward_from` chose."""
+        return (float(self._s[adapt_index(self._ix)[1]]) if self.blends
+                else 0.0)
 
     # --- python-control system ----------------------------------------
     def _update(self, t, x, u, params=None):
@@ -329,43 +338,6 @@ def _rebuild(design, name, state, operating_point):
     ctrl.reset(y=operating_point[1], u=operating_point[0])
     ctrl._s[:] = state
     return ctrl
-
-
-def _feedforward_source(choice, result, lin_model, integrating, zeros,
-                        max_preview):
-    """Whether the feedforward inverts the sandwich's own mbar L1 L2
-    (else the linear baseline), and a note saying why."""
-    if choice not in ('auto', 'model', 'baseline'):
-        raise ValueError(f"feedforward_from must be 'auto', 'model' or "
-                         f"'baseline'; got {choice!r}")
-    if not isinstance(lin_model, ct.TransferFunction):
-        if choice == 'baseline':
-            raise ValueError("feedforward_from='baseline' needs an "
-                             "identification result with a linear "
-                             "baseline (sw.identify's result)")
-        return True, "linear part designed on the model's mbar L1 L2"
-    gap = result.fit - result.linear['fit']
-    if choice == 'auto':
-        # zeros outside the unit circle that the preview inverse can only
-        # keep by their DC gain (sampling zeros on the negative real axis
-        # it may keep so)
-        outside = np.array([abs(zj) >= 1 and np.real(zj) >= sd.RINGING
-                            and sd.series_length(zj) > max_preview
-                            for zj in zeros], bool)
-        use = not integrating and gap >= MODEL_FF_GAP and not outside.any()
-        why = (f"the sandwich fits {gap:.1f} points better than the "
-               f"baseline (" + ("at least " if gap >= MODEL_FF_GAP
-                                else "less than ") + f"{MODEL_FF_GAP:g})"
-               + (", but L1 integrates" if integrating else "")
-               + (f", but L1 L2 has zeros outside the unit circle at "
-                  f"{sd._fmt_roots(zeros[outside])}" if outside.any()
-                  else ""))
-    else:
-        use, why = choice == 'model', "as asked"
-    return use, ("feedback designed on the result's linear baseline fit; "
-                 "feedforward inverts the " + ("sandwich's mbar L1 L2"
-                                               if use else "baseline")
-                 + f": {why}")
 
 
 def _static_inverse(num, den):
@@ -486,9 +458,14 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         at most 1); ``ctrl.band_gain`` reads it and ``reset()`` restarts
         it. By default it runs for an identification result of a sandwich
         with the default share; True asks for it with a share given by
-        hand, False turns it off. It reads only r and the measured y, so a load that
-        coasts into the gap (the play seen smaller than the band) and a
-        play larger than identified both move it the right way.
+        hand, False turns it off. It reads only r and the measured y, so a
+        load that coasts into the gap (the play seen smaller than the
+        band) and a play larger than identified both move it the right
+        way. With ``feedforward_from='auto'`` and both linear models
+        invertible, the share b of the feedforward not chosen (the
+        baseline's or the sandwich's, ``ctrl.feedforward_blend``, 0 at
+        rest) is estimated with g; its prior is worth one
+        `servo_reference` run travelling five of the model's bands.
     feedback_scale : float, optional
         Factor on the designed PID gains (default 1), for detuning or
         sweeps; the scaled loop is checked like the designed one.
@@ -558,7 +535,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                 lin_model = None
                 baseline_note = (f"the result's linear baseline cannot be "
                                  f"designed on ({exc}), so ")
-        ff_model, linear_note = _feedforward_source(
+        ff_model, linear_note = sd.feedforward_source(
             feedforward_from, result, lin_model, integrating,
             np.concatenate([model.L1.zeros(), model.L2.zeros()]),
             max_preview)
@@ -604,20 +581,29 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     if adapt not in (None, True, False):
         raise ValueError(f"adapt must be None (automatic), True or False; "
                          f"got {adapt!r}")
-    scal = [1, 1, 0, 0, 0, 1, 0, 0, 1, 0, 0, 1, u0, y0]
+    scal = [1, 1, 0, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, u0, y0]
+    other, blends = zero, False
     if feedforward is None:
         preview, lin_ff = 0, zero
         notes.append("no feedforward: feedback only")
     else:
-        if comp and ff_model:
+        if comp:
             Pm = mbar * model.L1 * model.L2
-            fn, fd, preview, approx = sd.preview_inverse(
-                np.trim_zeros(Pm.num[0][0], 'f'), Pm.den[0][0], feedforward,
-                max_preview)
-        else:
-            fn, fd, preview, approx = sd.preview_inverse(
-                num, den, feedforward, max_preview)
+            Pm = (np.trim_zeros(Pm.num[0][0], 'f'), Pm.den[0][0])
+        fn, fd, preview, approx = sd.preview_inverse(
+            *(Pm if comp and ff_model else (num, den)), feedforward,
+            max_preview)
         notes.append(_ff_note(feedforward, preview, approx, linear_note))
+        if (comp and result is not None and adapt is not False
+                and band_by_default and feedforward_from == 'auto'
+                and isinstance(lin_model, ct.TransferFunction)
+                and not integrating and not sd.outside(
+                    np.concatenate([model.L1.zeros(), model.L2.zeros()]),
+                    max_preview).any()):
+            # the other feedforward, blended in online (see sd.blend)
+            other = sd.preview_inverse(
+                *((num, den) if ff_model else Pm), feedforward,
+                max_preview)[:3]
     if comp:
         # a model without data (known, or built by hand) is inverted
         # exactly along the reference; an identified one gets the band
@@ -672,7 +658,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         # align the band offset (through L2^-1, the inverse, L1^-1) with
         # the linear feedforward: both reach the plant for the same r(k)
         offset_preview = p1 + p2 + lead
-        total = max(preview, offset_preview)
+        total = max(preview, offset_preview,
+                    other[2] if isinstance(other, tuple) and len(other) == 3
+                    else 0)
         pre = _ss(n2, d2, dt)
         post = _ss(n1, np.r_[d1, np.zeros(total - offset_preview)], dt)
         fd = np.r_[fd, np.zeros(total - preview)]
@@ -683,12 +671,20 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         scal = [*slopes, band_fraction_out * co['D1'],
                 band_fraction_out * co['D2'], smoothing_out, mbar,
                 band_x / jump if jump > 1 else 0.0, float(exact), 1, 0, 0,
-                1, u0, y0]
+                1, 0, 0, u0, y0]
         got = sd.band_adaptation(adapt, num, den, C, post, band_x,
                                  band_fraction_out, exact, band_by_default,
                                  scal, notes)
         if got is not None:
             ps, adapts = got, True
+            if isinstance(other, tuple) and len(other) == 3:
+                on, od, op = other
+                od = np.r_[od, np.zeros(total - op)]
+                other = _ss(on, od, dt)
+                blends = sd.blend(ps, other, _ss(fn, np.r_[
+                    fd, np.zeros(total - preview)], dt), model, scal, notes)
+        if not blends:
+            other = zero
         notes.append(
             f"backlash inverse on the reference: {band_fraction_out:.0%} of "
             f"the model's band (D1 + D2 = {co['D1'] + co['D2']:.4g} in x) "
@@ -704,6 +700,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     design.update(preview=int(preview), band_fraction=float(band_fraction),
                   smoothing=float(smoothing), jump_samples=int(jump),
                   compensates=bool(comp), adapts=bool(adapts), _ps=ps,
+                  blends=bool(blends), _other=other if blends else zero,
                   notes=notes, _pre=pre, _post=post,
                   _linear=lin_ff,
                   _lead=int(lead), _scalars=np.array(scal, float))
@@ -718,8 +715,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         ctrl.band_fraction = 0.0
         ctrl._design['band_fraction'] = 0.0
         ctrl._design['_scalars'][2:4] = 0.0
-        ctrl._ix[14] = 0
+        ctrl._ix[14] = ctrl._ix[17] = 0
         ctrl.adapts = ctrl._design['adapts'] = False
+        ctrl.blends = ctrl._design['blends'] = False
         notes.append(f"compensation turned off: with it, tracking on the "
                      f"identified model itself was over {HARM:g} times "
                      f"worse than without (pass band_fraction to force it)")
