@@ -810,6 +810,15 @@ def _params():
     return out
 
 
+@pytest.fixture(scope='module', autouse=True)
+def _compiled_servo_step():
+    """Compile the servo controller's step once, before the timed calls:
+    a row whose plant fails after a few samples runs it, and numba's
+    first compilation on a fresh machine (about 2 s on CI's) is not work
+    done on the bad input."""
+    sw.servo_controller(PLANT).step(0.0, 0.0)
+
+
 @pytest.mark.parametrize('call, error, match', _params())
 def test_bad_input_is_refused_with_a_clear_message(call, error, match,
                                                    tmp_path):
