@@ -46,6 +46,7 @@ import numpy as np
 import control as ct
 
 from .inverse import _fmt_roots
+from .references import servo_reference
 
 #: a zero this close to the unit circle or outside counts as unstable
 ZERO_RADIUS = 1.0
@@ -428,25 +429,31 @@ def adaptation(num, den, C, post, band_x):
 BLEND_TRAVEL = 5.0
 
 
-def blend(ps, other, chosen, model, scal, notes):
-    """Whether the share b of the other linear feedforward is estimated
-    online beside the band's gain, and its prior in `scal`: the inverse
-    of the energy of its regressor PS (other - chosen) over
-    `servo_reference` travelling 20 of the model's bands (a prior worth
-    one such run, whatever the units). `ps`, `other` and `chosen` are
-    (A, B, C, D) arrays."""
-    from .references import servo_reference
+def design_reference(model, bands, dt):
+    """`servo_reference` travelling `bands` of the sandwich's band as seen
+    in y (through L2's DC gain; 1 when that is not finite), sampled at dt
+    (at most 0.01 s; 0.01 s for a model without a sample time): the
+    reference the design checks its choices on."""
     co = model.coefficients
     num, den = model.L2.num[0][0], model.L2.den[0][0]
     with np.errstate(divide='ignore', invalid='ignore'):
         gain = abs(np.polyval(num, 1.0) / np.polyval(den, 1.0))
     band = 0.5 * (co['m1'] + co['m2']) * (co['D1'] + co['D2']) * gain
-    travel = BLEND_TRAVEL * band if np.isfinite(band) and band > 0 else 1.0
-    step = model.dt if model.dt is not True and model.dt <= 0.01 else 0.01
-    sys_dt = model.dt
-    diff = ct.ss(*other, sys_dt) - ct.ss(*chosen, sys_dt)
-    r = servo_reference(step, travel)
-    phi = ct.forced_response(ct.ss(*ps, sys_dt) * diff, inputs=r).outputs
+    travel = bands * band if np.isfinite(band) and band > 0 else 1.0
+    return servo_reference(dt if dt is not True and dt <= 0.01 else 0.01,
+                           travel)
+
+
+def blend(ps, other, chosen, model, dt, scal, notes):
+    """Whether the share b of the other linear feedforward is estimated
+    online beside the band's gain, and its prior in `scal`: the inverse
+    of the energy of its regressor PS (other - chosen) over
+    `design_reference` travelling `BLEND_TRAVEL` of the model's bands (a
+    prior worth one such run, whatever the units). `ps`, `other` and
+    `chosen` are (A, B, C, D) arrays, dt their sample time."""
+    diff = ct.ss(*other, dt) - ct.ss(*chosen, dt)
+    r = design_reference(model, BLEND_TRAVEL, dt)
+    phi = ct.forced_response(ct.ss(*ps, dt) * diff, inputs=r).outputs
     energy = float(np.sum(phi ** 2))
     if not np.isfinite(energy) or energy <= 0:
         return False

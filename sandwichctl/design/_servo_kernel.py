@@ -138,20 +138,20 @@ def servo_step(p, ix, s, r_ahead, y):
         s[i_bl + 2] += step
         x += s[i_bl + 2]
     u_ff = _block(p, ix[8], n_post, s, i_bl + 3, x)
+    u_lin = _block(p, ix[11], ix[10], s, i_bl + 3 + n_post, ra)
     i_ps = i_bl + 3 + n_post + ix[10]
     if ix[17]:
         # the band's gain and the blend towards the other feedforward
-        u_lin = _block(p, ix[11], ix[10], s, i_bl + 3 + n_post, ra)
         i_o = i_ps + ix[12] + 2
         d = _block(p, ix[16], ix[15], s, i_o, ra) - u_lin
         g, b = _blend(p, ix, s, i_ps, i_o + ix[15], u_ff, d, r_now - yd)
         u_ff *= g
         u_ff += u_lin
         u_ff += b * d
-        return p[sc + _U0] + u_fb + u_ff
-    if ix[14]:
-        u_ff *= _adapt(p, ix, s, i_ps, u_ff, r_now - yd)
-    u_ff += _block(p, ix[11], ix[10], s, i_bl + 3 + n_post, ra)
+    else:
+        if ix[14]:
+            u_ff *= _adapt(p, ix, s, i_ps, u_ff, r_now - yd)
+        u_ff += u_lin
     return p[sc + _U0] + u_fb + u_ff
 
 

@@ -60,7 +60,6 @@ from . import _servo_design as sd
 from ._servo_kernel import (pack, servo_step, servo_run, adapt_index,
                             NSCALAR)
 from .loop import servo_loop, ss_arrays
-from .references import servo_reference
 from ..model.sandwich import SandwichSystem
 from .._checks import (check_finite, check_int, check_name,
                        check_nonnegative, check_positive, check_signal)
@@ -535,9 +534,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                 lin_model = None
                 baseline_note = (f"the result's linear baseline cannot be "
                                  f"designed on ({exc}), so ")
+        ff_zeros = np.concatenate([model.L1.zeros(), model.L2.zeros()])
         ff_model, linear_note = sd.feedforward_source(
-            feedforward_from, result, lin_model, integrating,
-            np.concatenate([model.L1.zeros(), model.L2.zeros()]),
+            feedforward_from, result, lin_model, integrating, ff_zeros,
             max_preview)
         P = (lin_model if isinstance(lin_model, ct.TransferFunction)
              else mbar * model.L1 * model.L2)
@@ -582,7 +581,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         raise ValueError(f"adapt must be None (automatic), True or False; "
                          f"got {adapt!r}")
     scal = [1, 1, 0, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, u0, y0]
-    other, blends = zero, False
+    other, other_inv, blends = zero, None, False
     if feedforward is None:
         preview, lin_ff = 0, zero
         notes.append("no feedforward: feedback only")
@@ -597,11 +596,10 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         if (comp and result is not None and adapt is not False
                 and band_by_default and feedforward_from == 'auto'
                 and isinstance(lin_model, ct.TransferFunction)
-                and not integrating and not sd.outside(
-                    np.concatenate([model.L1.zeros(), model.L2.zeros()]),
-                    max_preview).any()):
+                and not integrating
+                and not sd.outside(ff_zeros, max_preview).any()):
             # the other feedforward, blended in online (see sd.blend)
-            other = sd.preview_inverse(
+            other_inv = sd.preview_inverse(
                 *((num, den) if ff_model else Pm), feedforward,
                 max_preview)[:3]
     if comp:
@@ -659,8 +657,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         # the linear feedforward: both reach the plant for the same r(k)
         offset_preview = p1 + p2 + lead
         total = max(preview, offset_preview,
-                    other[2] if isinstance(other, tuple) and len(other) == 3
-                    else 0)
+                    0 if other_inv is None else other_inv[2])
         pre = _ss(n2, d2, dt)
         post = _ss(n1, np.r_[d1, np.zeros(total - offset_preview)], dt)
         fd = np.r_[fd, np.zeros(total - preview)]
@@ -677,12 +674,11 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                                  scal, notes)
         if got is not None:
             ps, adapts = got, True
-            if isinstance(other, tuple) and len(other) == 3:
-                on, od, op = other
-                od = np.r_[od, np.zeros(total - op)]
-                other = _ss(on, od, dt)
-                blends = sd.blend(ps, other, _ss(fn, np.r_[
-                    fd, np.zeros(total - preview)], dt), model, scal, notes)
+            if other_inv is not None:
+                on, od, op = other_inv
+                other = _ss(on, np.r_[od, np.zeros(total - op)], dt)
+                blends = sd.blend(ps, other, _ss(fn, fd, dt), model, dt,
+                                  scal, notes)
         if not blends:
             other = zero
         notes.append(
@@ -700,7 +696,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     design.update(preview=int(preview), band_fraction=float(band_fraction),
                   smoothing=float(smoothing), jump_samples=int(jump),
                   compensates=bool(comp), adapts=bool(adapts), _ps=ps,
-                  blends=bool(blends), _other=other if blends else zero,
+                  blends=bool(blends), _other=other,
                   notes=notes, _pre=pre, _post=post,
                   _linear=lin_ff,
                   _lead=int(lead), _scalars=np.array(scal, float))
@@ -747,14 +743,7 @@ def _helps_on_model(ctrl, model):
     """Whether the band offset does not make the RMS error of the loop
     around the identified model `HARM` times worse, for a reference that
     travels 20 bands."""
-    co = model.coefficients
-    num, den = model.L2.num[0][0], model.L2.den[0][0]
-    with np.errstate(divide='ignore', invalid='ignore'):
-        gain = abs(np.polyval(num, 1.0) / np.polyval(den, 1.0))
-    band = 0.5 * (co['m1'] + co['m2']) * (co['D1'] + co['D2']) * gain
-    travel = 20 * band if np.isfinite(band) and band > 0 else 1.0
-    dt = ctrl.dt if ctrl.dt is not True and ctrl.dt <= 0.01 else 0.01
-    r = servo_reference(dt, travel)
+    r = sd.design_reference(model, 20, ctrl.dt)
     errors = []
     for scale in (1.0, 0.0):
         trial = ServoController(ctrl._design)
