@@ -131,6 +131,12 @@ def check_finite(name, value):
     return value
 
 
+def check_real(name, value):
+    """Return `value` as float, requiring a real number (NaN and inf pass:
+    the caller says what they mean for it)."""
+    return _as_real_scalar(name, value)
+
+
 def check_int(name, value, minimum=0, maximum=None):
     """Return `value` as int, requiring an integer in [minimum, maximum].
 
@@ -169,10 +175,12 @@ def check_option(name, value, allowed):
     if isinstance(value, (bool, np.bool_)) and not any(
             isinstance(a, bool) for a in allowed):
         ok = False
+    elif isinstance(value, np.ndarray) and value.ndim:
+        ok = False                 # `in` would compare elementwise
     else:
         try:
-            ok = value in allowed
-        except TypeError:          # unhashable
+            ok = bool(value in allowed)
+        except (TypeError, ValueError):    # unhashable, or ambiguous
             ok = False
     if not ok:
         choices = ', '.join(repr(a) for a in allowed)

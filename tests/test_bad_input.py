@@ -52,6 +52,20 @@ class _NanPlant:
         return np.nan if self.k == 2 else 0.0
 
 
+class _OddPlant:
+    """A user plant whose step returns `value` and whose read returns
+    `first` (0.0 by default)."""
+
+    def __init__(self, value, first=0.0):
+        self.value, self.first = value, first
+
+    def read(self):
+        return self.first
+
+    def step(self, u):
+        return self.value
+
+
 def _nan_at(k, n=N):
     x = np.ones(n)
     x[k] = np.nan
@@ -534,7 +548,7 @@ ROWS = [
     ('servo_controller-feedback_from-no-baseline',
      lambda t: sw.servo_controller(PLANT, feedback_from='baseline'), VE,
      'linear baseline'),
-    ('servo_controller-feedforward_from',
+    ('servo_controller-feedforward_from-list',
      lambda t: sw.servo_controller(PLANT, feedforward_from=['auto']), VE,
      'feedforward_from'),
     ('servo_controller-adapt-known-model',
@@ -546,6 +560,46 @@ ROWS = [
     ('servo_controller-operating_point',
      lambda t: sw.servo_controller(PLANT, operating_point=(1.0,)), VE,
      'operating_point'),
+    ('servo_controller-feedforward-array',
+     lambda t: sw.servo_controller(PLANT, feedforward=np.ones(2)), VE,
+     'feedforward'),
+    ('servo_controller-feedforward_from',
+     lambda t: sw.servo_controller(L2 * L1, feedforward_from='bogus'), VE,
+     'feedforward_from'),
+    ('servo_controller-adapt-array',
+     lambda t: sw.servo_controller(PLANT, adapt=np.ones(2)), VE, 'adapt'),
+    ('servo_controller-jump_samples-huge',
+     lambda t: sw.servo_controller(PLANT, jump_samples=BIG), VE,
+     'jump_samples'),
+    ('servo_controller-max_preview-huge',
+     lambda t: sw.servo_controller(PLANT, max_preview=BIG), VE,
+     'max_preview'),
+    ('servo_controller-feedback_scale-huge',
+     lambda t: sw.servo_controller(PLANT, feedback_scale=1e308), VE,
+     'feedback_scale.*smaller'),
+    ('servo_controller-feedback_scale-tiny',
+     lambda t: sw.servo_controller(PLANT, feedback_scale=1e-30), VE,
+     'feedback_scale.*closer to 1'),
+    ('servo_controller-gain-huge',
+     lambda t: sw.servo_controller(ct.tf([1e300], [1, -0.5], 1)), VE,
+     'model has a gain of order 1.0e\\+300.*rescale'),
+    ('servo_controller-slopes-huge',
+     lambda t: sw.servo_controller(PLANT.copy_with(m1=1e300, m2=1e300)),
+     VE, 'design plant has a gain'),
+    ('ServoController-step-str',
+     lambda t: sw.servo_controller(PLANT).step('0.5', 0.0), TE, 'r_ahead'),
+    ('ServoController-step-array',
+     lambda t: sw.servo_controller(PLANT).step(0.0, np.ones(2)), TE, 'y'),
+    ('ServoController-step-bool',
+     lambda t: sw.servo_controller(PLANT).step(True, 0.0), TE, 'r_ahead'),
+    ('closed_loop_response-servo-plant-returns-array',
+     lambda t: sw.closed_loop_response(_OddPlant(np.ones(2)), U,
+                                       sw.servo_controller(PLANT)), TE,
+     r'plant.step\(u\) must return.*ndarray.*sample 1'),
+    ('closed_loop_response-servo-plant-read-None',
+     lambda t: sw.closed_loop_response(_OddPlant(0.0, None), U,
+                                       sw.servo_controller(PLANT)), TE,
+     r'plant.read\(\) must return.*NoneType'),
     ('ServoController-reset',
      lambda t: sw.servo_controller(PLANT).reset(y=np.nan), VE, 'y'),
     ('ServoController-run',
@@ -567,6 +621,8 @@ ROWS = [
      lambda t: sw.export_c(COMP, _file(t, 'f.txt', '')), VE, 'directory'),
     ('export_c-name', lambda t: sw.export_c(COMP, t, name='1st'), VE,
      'name'),
+    ('export_c-name-long', lambda t: sw.export_c(COMP, t, name='x' * 300),
+     VE, 'name must be at most 200'),
     ('export_c-dtype', lambda t: sw.export_c(COMP, t, dtype='half'), VE,
      'dtype'),
     ('servo_reference-dt', lambda t: sw.servo_reference(0, 1.0), VE, 'dt'),
@@ -576,6 +632,16 @@ ROWS = [
      lambda t: sw.servo_reference(1e-3, 1.0, hold=1e308), VE, 'samples'),
     ('servo_reference-tiny-dt',
      lambda t: sw.servo_reference(1e-300, 1.0), VE, 'samples'),
+    ('servo_reference-dt-huge',
+     lambda t: sw.servo_reference(1e308, 1.0), VE, 'dt must be at most'),
+    ('servo_reference-total',
+     lambda t: sw.servo_reference(2e-8, 1.0), VE, 'samples'),
+    ('servo_metrics-window', lambda t: sw.servo_metrics(U, U, U, 1e-3,
+                                                        window=np.inf), VE,
+     'window'),
+    ('servo_metrics-hold', lambda t: sw.servo_metrics(U, U, U, 1e-3,
+                                                      hold='0.3'), TE,
+     'hold'),
     ('servo_metrics-y', lambda t: sw.servo_metrics(U, U[:5], U, 1e-3), VE,
      'y'),
     ('servo_metrics-deadband',
@@ -753,6 +819,9 @@ ROWS = [
     ('identify-minimum_phase-recursive',
      lambda t: sw.identify(UL, YL, **ORD, method='rpem',
                            minimum_phase='L1'), TE, 'minimum_phase'),
+    ('identify-integrators-array',
+     lambda t: sw.identify(UL, YL, **ORD, integrators=np.ones(2)), VE,
+     'integrators'),
     ('identify-integrator_block',
      lambda t: sw.identify(UL, YL, **ORD, integrator_block='L3'), VE,
      'integrator_block'),
@@ -803,6 +872,24 @@ ROWS = [
     ('data.ServoDrive-n', lambda t: sw.data.ServoDrive(n=0), VE, 'n'),
     ('data.ServoDrive-param', lambda t: sw.data.ServoDrive(mass=3), TE,
      'parameter'),
+    ('data.servo_drive-loop-array',
+     lambda t: sw.data.servo_drive(U, loop=np.ones(2)), VE, 'loop'),
+    ('data.servo_drive-seed',
+     lambda t: sw.data.servo_drive(U, seed=2.5), TE, 'seed'),
+    ('data.servo_drive-substeps',
+     lambda t: sw.data.servo_drive(U, substeps=10 ** 9), VE, 'substeps'),
+    ('data.ServoDrive-n-huge', lambda t: sw.data.ServoDrive(n=BIG ** 2), VE,
+     'n'),
+    ('data.ServoDrive-seed', lambda t: sw.data.ServoDrive(seed=-1), VE,
+     'seed'),
+    ('data.drive_reference-n-huge',
+     lambda t: sw.data.drive_reference(BIG ** 2), VE, 'n'),
+    ('data.drive_reference-rng',
+     lambda t: sw.data.drive_reference(100, rng='a'), TE, 'rng'),
+    ('data.drive_reference-dt',
+     lambda t: sw.data.drive_reference(100, dt=1e-308), VE, 'dt'),
+    ('data.drive_case-n_val-huge',
+     lambda t: sw.data.drive_case(0, n=100, n_val=BIG ** 2), VE, 'n_val'),
     ('data.random_drive-seed', lambda t: sw.data.random_drive(-1), VE,
      'seed'),
     ('data.drive_reference-n',

@@ -70,7 +70,7 @@ import numba
 import numpy as np
 
 from .._checks import (check_int, check_positive, check_nonnegative,
-                       check_signal)
+                       check_option, check_signal)
 
 __all__ = ['servo_drive', 'ServoDrive', 'random_drive', 'drive_reference', 'drive_case', 'DriveCase',
            'DRIVE_PARAMETERS', 'DRIVE_DT']
@@ -106,7 +106,22 @@ DRIVE_PARAMETERS = {
 
 _NONNEGATIVE = ('B', 'c', 'Fc', 'b', 'Ki_pos', 'torque_noise')
 _INTEGER = {'counts': 0, 'substeps': 1}
+#: most sub-steps a sample (random_drive draws at most a few hundred)
+MOST_SUBSTEPS = 10_000
+#: most samples a drive is set up for or a reference drawn (800 MB)
+MOST_SAMPLES = 10 ** 8
 _LOOPS = ('position', 'speed')
+
+
+def _rng(name, seed):
+    """numpy's generator of `seed`, refused with a message naming it."""
+    try:
+        return np.random.default_rng(seed)
+    except (TypeError, ValueError) as exc:
+        kind = TypeError if isinstance(exc, TypeError) else ValueError
+        raise kind(f"{name} must be None, an integer >= 0 or a "
+                   f"numpy.random.Generator; got {type(seed).__name__} "
+                   f"{seed!r}") from None
 
 
 def _params(params):
@@ -120,7 +135,9 @@ def _params(params):
         value = params.get(key, value)
         label = f"{key} [{unit}]"
         if key in _INTEGER:
-            out[key] = check_int(label, value, minimum=_INTEGER[key])
+            out[key] = check_int(label, value, minimum=_INTEGER[key],
+                                 maximum=(MOST_SUBSTEPS if key == 'substeps'
+                                          else None))
         elif key in _NONNEGATIVE:
             out[key] = check_nonnegative(label, value)
         else:
@@ -306,12 +323,11 @@ class _Setup:
 def _setup(loop, play, dt, seed, n, params):
     """Checked arguments, kernel parameters and the random draws of a run
     of n samples (the torque disturbance, then the encoder offset)."""
-    if loop not in _LOOPS:
-        raise ValueError(f"loop must be 'position' or 'speed'; got {loop!r}")
+    check_option('loop', loop, _LOOPS)
     play = check_nonnegative('play', play)
     dt = check_positive('dt', dt)
     p = _params(params)
-    rng = np.random.default_rng(seed)
+    rng = _rng('seed', seed)
     disturbance = p['torque_noise'] * rng.standard_normal(n)
     offset = rng.uniform(0, p['resolution'])
     q_motor = 2 * np.pi / p['counts'] if p['counts'] else 0.0
@@ -365,7 +381,7 @@ class ServoDrive:
 
     def __init__(self, loop='position', play=200e-6, dt=DRIVE_DT, seed=None,
                  n=100_000, **params):
-        n = check_int('n', n, minimum=1)
+        n = check_int('n', n, minimum=1, maximum=MOST_SAMPLES)
         self._setup = _setup(loop, play, dt, seed, n, params)
         self.loop = loop
         self.dt = self._setup.dt
@@ -470,11 +486,13 @@ def drive_reference(n, loop='position', rng=None, dt=DRIVE_DT):
     >>> bool(abs(r).max() < 3.5)
     True
     """
-    n = check_int('n', n, minimum=2)
-    if loop not in _LOOPS:
-        raise ValueError(f"loop must be 'position' or 'speed'; got {loop!r}")
+    n = check_int('n', n, minimum=2, maximum=MOST_SAMPLES)
+    check_option('loop', loop, _LOOPS)
     dt = check_positive('dt', dt)
-    rng = np.random.default_rng(rng)
+    if not 1e-9 <= dt <= 1e3:
+        raise ValueError(f"dt must be a sample time between 1e-9 and 1e3 "
+                         f"s; got {dt!r}")
+    rng = _rng('rng', rng)
     hold = (max(1, int(0.15 / dt)), max(2, int(0.6 / dt)))
     if loop == 'position':
         return (_staircase(n, rng, hold, 1.0, 2.0)
@@ -626,8 +644,9 @@ def drive_case(seed, loop='position', play=200e-6, n=5000, n_val=None,
     (2000, 2000, 0.001)
     """
     seed = check_int('seed', seed)
-    n = check_int('n', n, minimum=2)
-    n_val = n if n_val is None else check_int('n_val', n_val, minimum=2)
+    n = check_int('n', n, minimum=2, maximum=MOST_SAMPLES)
+    n_val = n if n_val is None else check_int('n_val', n_val, minimum=2,
+                                              maximum=MOST_SAMPLES)
     r_est, r_val, d_est, d_val = (
         np.random.default_rng(s)
         for s in np.random.SeedSequence([seed, 0xd21e]).spawn(4))

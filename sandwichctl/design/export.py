@@ -67,6 +67,10 @@ _SCALARS = ('m1', 'm2', 'D1', 'D2', 'width', 'mbar', 'rate', 'alpha', 'lam',
             'p0', 'pmax', 'gmax', 'pb0', 'pbmax', 'u0', 'y0')
 
 
+#: longest name: file names stop at 255 bytes on most file systems
+MOST_NAME = 200
+
+
 def _check_name(name):
     if not isinstance(name, str):
         raise TypeError(f"name must be a string (a C identifier); got "
@@ -77,6 +81,10 @@ def _check_name(name):
             f"name must be a C identifier that is no C keyword: a letter, "
             f"then letters, digits or '_' (it prefixes every function, "
             f"e.g. 'servo' gives servo_step); got {name!r}")
+    if len(name) > MOST_NAME:
+        raise ValueError(f"name must be at most {MOST_NAME} characters (it "
+                         f"names the files {name[:8]}....h and .c); got "
+                         f"{len(name)}")
     if name in ('math', 'stddef', 'string'):
         raise ValueError(f"name {name!r} would write {name}.h, which "
                          f"shadows the standard header <{name}.h>; choose "

@@ -24,7 +24,8 @@ from ._servo_kernel import servo_step
 from ..model._kernel import _ss_output, _ss_update
 from ..model.backlash import backlash_step
 from ..model.sandwich import SandwichSystem, _warn_divergence
-from .._checks import check_signal, check_positive, check_nonnegative
+from .._checks import (check_signal, check_positive, check_nonnegative,
+                       check_real)
 
 __all__ = ['servo_metrics']
 
@@ -104,7 +105,8 @@ def servo_loop(plant, r, ctrl):
         return y, u
     if hasattr(plant, 'reset'):
         plant.reset()
-    yk = float(plant.read()) if hasattr(plant, 'read') else 0.0
+    yk = (_measured(plant.read(), 'read()', 0) if hasattr(plant, 'read')
+          else 0.0)
     for k in range(n):
         if not math.isfinite(yk):
             raise ValueError(
@@ -113,8 +115,20 @@ def servo_loop(plant, r, ctrl):
         uk = servo_step(ctrl._p, ctrl._ix, ctrl._s, r_ahead[k], yk)
         y[k], u[k] = yk, uk
         if k + 1 < n:
-            yk = float(plant.step(uk))
+            yk = _measured(plant.step(uk), 'step(u)', k + 1)
     return y, u
+
+
+def _measured(value, call, k):
+    """The float y a user plant's `call` returned for sample k."""
+    if type(value) is float:
+        return value
+    try:
+        return check_real('y', value)
+    except TypeError:
+        raise TypeError(
+            f"plant.{call} must return the measurement y as a real number; "
+            f"got {type(value).__name__} {value!r} at sample {k}") from None
 
 
 def _holds(r, shortest):
@@ -192,11 +206,15 @@ def servo_metrics(reference, y, u, dt, window=0.1, hold=0.3, deadband=0.0):
     u = check_signal('u', u, r.size)
     dt = check_positive('dt', dt)
     deadband = check_nonnegative('deadband', deadband)
+    window = check_nonnegative('window', window)
+    hold = check_nonnegative('hold', hold)
     e = r - y
     hunting = 0
-    for a, b in _holds(r, max(2, int(round(hold / dt)))):
+    # in samples, at most the record's (window / dt may overflow)
+    shortest = max(2, int(round(min(hold / dt, r.size + 2.0))))
+    for a, b in _holds(r, shortest):
         hunting = max(hunting, _turns(y[(a + b) // 2:b], deadband))
-    win = max(1, int(round(window / dt)))
+    win = max(1, int(round(min(window / dt, r.size + 2.0))))
     near = [e[k:k + win] for k in _reversals(r)]
     near = np.concatenate(near) if near else e
     return dict(rms=float(np.sqrt(np.mean(e ** 2))),

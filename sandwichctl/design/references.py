@@ -60,7 +60,7 @@ def steps_and_sines(n=1200, levels=(0.0, 1.0, -0.5, 1.5, 0.3),
     return r
 
 
-#: most samples one part of `servo_reference` may take (a hold or the sine)
+#: most samples `servo_reference` may return (800 MB)
 MOST_SAMPLES = 1e8
 
 
@@ -97,11 +97,16 @@ def servo_reference(dt, travel, hold=0.5):
     dt = check_positive('dt', dt)
     travel = check_positive('travel', travel)
     hold = check_positive('hold', hold)
-    longest = max(hold, 2.0) / dt
-    if longest > MOST_SAMPLES:
-        raise ValueError(f"servo_reference: a hold of {hold:g} s (or the "
-                         f"2 s sine) at dt = {dt:g} s is {longest:.3g} "
-                         f"samples; at most {MOST_SAMPLES:.0e} a part")
+    if dt > 0.5:
+        raise ValueError(f"dt must be at most 0.5 s (two samples a period "
+                         f"of the trajectory's 1 Hz sine); got {dt:g}")
+    # about 5.25 s of steps, ramps and sine, and 8.4 holds
+    total = (5.25 + 8.4 * hold) / dt
+    if total > MOST_SAMPLES:
+        raise ValueError(f"servo_reference: holds of {hold:g} s at dt = "
+                         f"{dt:g} s make {total:.3g} samples; at most "
+                         f"{MOST_SAMPLES:.0e} (a longer dt or a shorter "
+                         f"hold)")
 
     def count(seconds):
         return max(2, int(round(seconds / dt)))

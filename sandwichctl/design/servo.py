@@ -61,8 +61,9 @@ from ._servo_kernel import (pack, servo_step, servo_run, adapt_index,
                             NSCALAR)
 from .loop import servo_loop, ss_arrays
 from ..model.sandwich import SandwichSystem
-from .._checks import (check_finite, check_int, check_name,
-                       check_nonnegative, check_positive, check_signal)
+from .._checks import (DATA_RANGE, MAX_ORDER, check_finite, check_int,
+                       check_name, check_nonnegative, check_option,
+                       check_positive, check_real, check_signal)
 
 
 __all__ = ['ServoController', 'servo_controller']
@@ -113,6 +114,15 @@ def _check_plant_tf(name, sys):
         raise ValueError(f"{name} must have at least one sample of delay "
                          f"(strictly proper); with none the loop is "
                          f"algebraic")
+    gain = np.max(np.abs(num)) / np.max(np.abs(den))
+    lo, hi = DATA_RANGE
+    if not lo <= gain <= hi:
+        what = 'overflow' if gain > hi else 'underflow'
+        raise ValueError(
+            f"{name} has a gain of order {gain:.1e} (largest numerator "
+            f"over largest denominator coefficient), outside {lo:g} .. "
+            f"{hi:g}: the design squares it, which would {what} double "
+            f"precision; rescale u or y (other units)")
     poles = np.roots(den) if den.size > 1 else np.zeros(0)
     at_one = np.abs(poles - 1.0) < 1e-6
     if at_one.sum() > 1 or np.any(np.abs(poles[~at_one]) >= 1.0):
@@ -123,6 +133,10 @@ def _check_plant_tf(name, sys):
             f"speed-in, position-out axis) or integrators=0, or with "
             f"fewer poles")
     return num, den
+
+
+#: types `ServoController.step` takes without a check
+_PLAIN = frozenset((float, int, np.float64, np.float32, np.int64))
 
 
 class ServoController(ct.NonlinearIOSystem):
@@ -216,7 +230,10 @@ class ServoController(ct.NonlinearIOSystem):
         just measured in; u(k) out. A value that is not finite raises
         before the memory is touched, so one bad reading does not poison
         every later sample."""
-        r, yk = float(r_ahead), float(y)
+        # a float or an int goes straight on (about 1 us a step)
+        r = (float(r_ahead) if type(r_ahead) in _PLAIN else
+             check_real('r_ahead', r_ahead))
+        yk = float(y) if type(y) in _PLAIN else check_real('y', y)
         if not (math.isfinite(r) and math.isfinite(yk)):
             raise ValueError(f"r_ahead and y must be finite; got "
                              f"r_ahead={r!r}, y={yk!r} (the controller's "
@@ -462,16 +479,13 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     mm = check_finite('modulus_margin', modulus_margin)
     if not 0 < mm < 1:
         raise ValueError(f"modulus_margin must be in (0, 1); got {mm!r}")
+    check_option('feedforward', feedforward, ('preview', 'zpetc', None))
     for key, choice in (('feedforward_from', feedforward_from),
                         ('feedback_from', feedback_from)):
-        if not (isinstance(choice, str)
-                and choice in ('auto', 'model', 'baseline')):
-            raise ValueError(f"{key} must be 'auto', 'model' or "
-                             f"'baseline'; got {choice!r}")
-    if feedforward not in ('preview', 'zpetc', None):
-        raise ValueError(f"feedforward must be 'preview', 'zpetc' or None; "
-                         f"got {feedforward!r}")
-    max_preview = check_int('max_preview', max_preview, minimum=0)
+        check_option(key, choice, ('auto', 'model', 'baseline'))
+    check_option('adapt', adapt, (None, True, False))
+    max_preview = check_int('max_preview', max_preview, minimum=0,
+                            maximum=MAX_ORDER)
     name = check_name('name', name)
     if (not isinstance(operating_point, (tuple, list))
             or len(operating_point) != 2):
@@ -505,11 +519,14 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     scale = check_positive('feedback_scale', feedback_scale)
     kp, ki, kd = scale * kp, scale * ki, scale * kd
     C = sd.pid_tf(kp, ki, kd, pole, dt)
-    mmod, gm, pm, radius = sd.loop_margins(num, den, C)
-    if radius >= 1:
-        raise ValueError(f"the feedback scaled by {scale:g} gives an "
-                         f"unstable loop (pole radius {radius:.4f}); use a "
-                         f"smaller feedback_scale")
+    with np.errstate(over='ignore', invalid='ignore', divide='ignore'):
+        # a feedback_scale of 1e300 overflows |CP|: refused just below
+        mmod, gm, pm, radius = sd.loop_margins(num, den, C)
+    if not radius < 1:
+        raise ValueError(f"feedback_scale={scale:g} gives an unstable loop "
+                         f"(pole radius {radius:.4g}); use a feedback_scale "
+                         + ("smaller" if scale > 1 else "closer to 1")
+                         + " (1 is the designed loop)")
     notes.append(f"{'PD' if ki == 0 else 'PID'} with the largest "
                  f"{'proportional' if ki == 0 else 'integral'} gain at "
                  f"modulus margin {mm:g}{'' if ki == 0 else ' and |T| <= 1'}"
@@ -529,9 +546,6 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     pre = post = zero
     lead, jump, band_fraction_out, smoothing_out = 0, 0, 0.0, 0.0
     ps, adapts = zero, False
-    if adapt not in (None, True, False):
-        raise ValueError(f"adapt must be None (automatic), True or False; "
-                         f"got {adapt!r}")
     scal = [1, 1, 0, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, u0, y0]
     other, other_inv, blends = zero, None, False
     if feedforward is None:
@@ -603,7 +617,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                         f"hardly controls the axis)")
                 jump = max(jump, min(slow, JUMP_MOST))
         else:
-            jump = check_int('jump_samples', jump_samples, minimum=1)
+            # half of it is preview, a delay: at most MAX_ORDER samples
+            jump = check_int('jump_samples', jump_samples, minimum=1,
+                             maximum=2 * MAX_ORDER)
         lead = jump // 2
         # align the band offset (through L2^-1, the inverse, L1^-1) with
         # the linear feedforward: both reach the plant for the same r(k)

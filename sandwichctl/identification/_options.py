@@ -130,8 +130,9 @@ class OEOptions(_Options):
 
     def __post_init__(self):
         k = self.integrators
-        if not (k == 'auto' or (isinstance(k, numbers.Integral)
-                                and not isinstance(k, bool) and k >= 0)):
+        if not ((isinstance(k, str) and k == 'auto')
+                or (isinstance(k, numbers.Integral)
+                    and not isinstance(k, bool) and k >= 0)):
             raise ValueError(f"integrators must be an integer >= 0 or "
                              f"'auto'; got {k!r}")
         if not (isinstance(self.integrator_block, str)
