@@ -45,6 +45,7 @@ loop is never returned.
 import numpy as np
 import control as ct
 
+from ..model.sandwich import SandwichSystem
 from .inverse import _fmt_roots
 from .references import servo_reference
 
@@ -479,36 +480,136 @@ def outside(zeros, max_preview):
                      for zj in zeros], bool)
 
 
-def feedforward_source(choice, result, lin_model, integrating, zeros,
-                        max_preview):
+def feedforward_source(choice, result, integrating, zeros, max_preview):
     """Whether the feedforward inverts the sandwich's own mbar L1 L2
-    (else the linear baseline), and a note saying why."""
-    if choice not in ('auto', 'model', 'baseline'):
-        raise ValueError(f"feedforward_from must be 'auto', 'model' or "
-                         f"'baseline'; got {choice!r}")
-    if not isinstance(lin_model, ct.TransferFunction):
-        if choice == 'baseline':
-            raise ValueError("feedforward_from='baseline' needs an "
-                             "identification result with a linear "
-                             "baseline (sw.identify's result)")
-        return True, "linear part designed on the model's mbar L1 L2"
+    (else the linear baseline), and why (`choice` is 'auto', 'model' or
+    'baseline'; there is a baseline)."""
+    if choice != 'auto':
+        return choice == 'model', "as asked"
     gap = result.fit - result.linear['fit']
-    if choice == 'auto':
-        # zeros outside the unit circle that the preview inverse can only
-        # keep by their DC gain (sampling zeros on the negative real axis
-        # it may keep so)
-        far = outside(zeros, max_preview)
-        use = not integrating and gap >= MODEL_FF_GAP and not far.any()
-        why = (f"the sandwich fits {gap:.1f} points better than the "
-               f"baseline (" + ("at least " if gap >= MODEL_FF_GAP
-                                else "less than ") + f"{MODEL_FF_GAP:g})"
-               + (", but L1 integrates" if integrating else "")
-               + (f", but L1 L2 has zeros outside the unit circle at "
-                  f"{_fmt_roots(zeros[far])}" if far.any()
-                  else ""))
+    # zeros outside the unit circle that the preview inverse can only
+    # keep by their DC gain (sampling zeros on the negative real axis
+    # it may keep so)
+    far = outside(zeros, max_preview)
+    use = not integrating and gap >= MODEL_FF_GAP and not far.any()
+    return use, (f"the sandwich fits {gap:.1f} points better than the "
+                 f"baseline (" + ("at least " if gap >= MODEL_FF_GAP
+                                  else "less than ") + f"{MODEL_FF_GAP:g})"
+                 + (", but L1 integrates" if integrating else "")
+                 + (f", but L1 L2 has zeros outside the unit circle at "
+                    f"{_fmt_roots(zeros[far])}" if far.any() else ""))
+
+
+def linear_part(model, result, lin_model, feedback_from, feedforward_from,
+                integrating, zeros, max_preview, mm, check_plant):
+    """The linear part of a sandwich's design: (P, pid, ff_model, note,
+    baseline). P is the plant the feedback is designed on and pid its
+    gains where they were designed already (else None; `zeros` are L1
+    L2's); ff_model whether
+    the feedforward inverts the sandwich's mbar L1 L2 (else the
+    baseline); note why; baseline the linear baseline where the design
+    uses it (else None).
+
+    The baseline (`lin_model`, a result's linear fit) carries the play's
+    effect on the loop, so by default the feedback is designed on it;
+    not when L2 integrates: a linear model cannot follow the drift the
+    play puts through an integrator after it, and spends a slow pole and
+    zero on it (step 5 of docs/algorithm.md), often with the wrong sign
+    or a crossover hundreds of times too slow."""
+    for name, choice in (('feedback_from', feedback_from),
+                         ('feedforward_from', feedforward_from)):
+        if choice == 'baseline' and not isinstance(lin_model,
+                                                   ct.TransferFunction):
+            raise ValueError(f"{name}='baseline' needs an identification "
+                             f"result with a linear baseline (sw.identify's "
+                             f"result)")
+    co = model.coefficients
+    own = 0.5 * (co['m1'] + co['m2']) * model.L1 * model.L2
+    if lin_model is None:
+        return own, None, True, "linear part designed on the model's " \
+            "mbar L1 L2", None
+    if feedback_from == 'auto' and integrates(model.L2):
+        return own, None, True, (
+            "L2 integrates (the integrator after the play), which a linear "
+            "baseline cannot follow (it spends a slow pole and zero on the "
+            "play's drift), so linear part designed on the model's mbar L1 "
+            "L2"), None
+    pid, fb_why = None, ''
+    if feedback_from != 'model':
+        try:
+            pid = design_pid(*check_plant('the baseline', lin_model),
+                             lin_model.dt, mm)
+        except ValueError as exc:
+            if 'baseline' in (feedback_from, feedforward_from):
+                raise ValueError(f"the result's linear baseline, asked for "
+                                 f"by feedback_from or feedforward_from, "
+                                 f"cannot be designed on: {exc}") from None
+            # the sandwich is what identify vouched for: design on it
+            return own, None, True, (
+                f"the result's linear baseline cannot be designed on "
+                f"({exc}), so linear part designed on the model's mbar L1 "
+                f"L2"), None
     else:
-        use, why = choice == 'model', "as asked"
-    return use, ("feedback designed on the result's linear baseline fit; "
-                 "feedforward inverts the " + ("sandwich's mbar L1 L2"
-                                               if use else "baseline")
-                 + f": {why}")
+        fb_why = " (as asked)"
+    use, why = feedforward_source(feedforward_from, result, integrating,
+                                  zeros, max_preview)
+    note = ("feedback designed on " + ("the result's linear baseline fit"
+                                       if pid is not None else
+                                       "the sandwich's mbar L1 L2" + fb_why)
+            + "; feedforward inverts the " + ("sandwich's mbar L1 L2" if use
+                                              else "baseline") + f": {why}")
+    return (lin_model if pid is not None else own), pid, use, note, lin_model
+
+
+#: a pole at z = 1 with a zero this close to it is a drift term of the
+#: model, not an integrator of the axis: the pair is cancelled first
+UNIT_CANCEL = 1e-4
+
+
+def cancel_unit_pair(sys):
+    """`sys` with a pole at z = 1 removed together with the zero next to
+    it (within `UNIT_CANCEL`), when no other pole is that close to 1; its
+    high-frequency gain is kept. Returns
+    (sys, the zero cancelled or None)."""
+    num = np.trim_zeros(sys.num[0][0].astype(float), 'f')
+    den = sys.den[0][0].astype(float)
+    if num.size < 2 or den.size < 2:
+        return sys, None
+    poles, zeros = np.roots(den), np.roots(num)
+    at_one = np.flatnonzero(np.abs(poles - 1) < 1e-6)
+    near = np.flatnonzero(np.abs(zeros - 1) < UNIT_CANCEL)
+    if not (at_one.size == 1 and near.size and np.sum(
+            np.abs(poles - 1) < UNIT_CANCEL) == 1):
+        return sys, None      # none, or more poles there than one pair
+    i = near[np.argmin(np.abs(zeros[near] - 1))]
+    num = np.real(num[0] * np.poly(np.delete(zeros, i)))
+    den = np.real(den[0] * np.poly(np.delete(poles, at_one)))
+    return ct.tf(num, den, sys.dt, name=sys.name), float(np.real(zeros[i]))
+
+
+def integrates(block):
+    """True if the transfer function has a pole at z = 1."""
+    den = block.den[0][0].astype(float)
+    return den.size > 1 and bool(np.any(np.abs(np.roots(den) - 1) < 1e-6))
+
+
+def cancel_drift(model, notes):
+    """A model with its drift terms (`cancel_unit_pair`) cancelled, each
+    told in `notes`."""
+    def cancel(sys, pole, zero):
+        out, at = cancel_unit_pair(sys)
+        if at is not None:
+            notes.append(f"{pole} at z = 1 and {zero} at {at:.6g} cancelled "
+                         f"before the design (a drift term of the model, "
+                         f"not an integrator)")
+        return out
+
+    if isinstance(model, SandwichSystem):
+        L1, L2 = (cancel(getattr(model, tag), f"{tag}'s pole", "its zero")
+                  for tag in ('L1', 'L2'))
+        if L1 is model.L1 and L2 is model.L2:
+            return model
+        return SandwichSystem(L1, model.backlash, L2, name=model.name)
+    if isinstance(model, ct.TransferFunction) and model.issiso():
+        return cancel(model, "the pole", "the zero")
+    return model

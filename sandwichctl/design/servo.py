@@ -18,7 +18,11 @@ designed on :math:`\bar m L_1 L_2`. For an identification result, the PID
 is designed on its linear baseline fit (the loop in the holds is then the
 linear design's), and the feedforward inverts the sandwich's own
 :math:`\bar m L_1 L_2` when it is the clearly better model (see
-``feedforward_from``), else the baseline; the band offset of the inverse
+``feedforward_from``), else the baseline. When L2 integrates (a valve's
+play before a cylinder) both are designed on :math:`\bar m L_1 L_2`: no
+linear model follows the drift the play puts through an integrator after
+it, and the baseline spends a slow pole and zero on it (see
+``feedback_from``). The band offset of the inverse
 reaches the plant through the DC gains of L1 and L2 (their fitted fast
 dynamics, inverted, would turn the offset's jump into ringing).
 
@@ -95,54 +99,6 @@ def _unwrap_model(model):
             not isinstance(model, (SandwichSystem, ct.TransferFunction)):
         return inner, model
     return model, None
-
-
-#: a pole at z = 1 with a zero this close to it is a drift term of the
-#: model, not an integrator of the axis: the pair is cancelled first
-UNIT_CANCEL = 1e-4
-
-
-def _cancel_unit_pair(sys):
-    """`sys` with a pole at z = 1 removed together with the zero next to
-    it (within `UNIT_CANCEL`), when no other pole is that close to 1; its
-    high-frequency gain is kept. Returns
-    (sys, the zero cancelled or None)."""
-    num = np.trim_zeros(sys.num[0][0].astype(float), 'f')
-    den = sys.den[0][0].astype(float)
-    if num.size < 2 or den.size < 2:
-        return sys, None
-    poles, zeros = np.roots(den), np.roots(num)
-    at_one = np.flatnonzero(np.abs(poles - 1) < 1e-6)
-    near = np.flatnonzero(np.abs(zeros - 1) < UNIT_CANCEL)
-    if not (at_one.size == 1 and near.size and np.sum(
-            np.abs(poles - 1) < UNIT_CANCEL) == 1):
-        return sys, None      # none, or more poles there than one pair
-    i = near[np.argmin(np.abs(zeros[near] - 1))]
-    num = np.real(num[0] * np.poly(np.delete(zeros, i)))
-    den = np.real(den[0] * np.poly(np.delete(poles, at_one)))
-    return ct.tf(num, den, sys.dt, name=sys.name), float(np.real(zeros[i]))
-
-
-def _cancel_drift(model, notes):
-    """A model with its drift terms (`_cancel_unit_pair`) cancelled, each
-    told in `notes`."""
-    def cancel(sys, pole, zero):
-        out, at = _cancel_unit_pair(sys)
-        if at is not None:
-            notes.append(f"{pole} at z = 1 and {zero} at {at:.6g} cancelled "
-                         f"before the design (a drift term of the model, "
-                         f"not an integrator)")
-        return out
-
-    if isinstance(model, SandwichSystem):
-        L1, L2 = (cancel(getattr(model, tag), f"{tag}'s pole", "its zero")
-                  for tag in ('L1', 'L2'))
-        if L1 is model.L1 and L2 is model.L2:
-            return model
-        return SandwichSystem(L1, model.backlash, L2, name=model.name)
-    if isinstance(model, ct.TransferFunction) and model.issiso():
-        return cancel(model, "the pole", "the zero")
-    return model
 
 
 def _check_plant_tf(name, sys):
@@ -405,7 +361,8 @@ def _jump_samples(L1_num, L1_den, band_x, dt, cap=2.0, longest=50):
 def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                      max_preview=20, band_fraction=None, smoothing=None,
                      jump_samples=None, feedback_scale=1.0,
-                     feedforward_from='auto', adapt=None,
+                     feedforward_from='auto', feedback_from='auto',
+                     adapt=None,
                      operating_point=(0.0, 0.0), name=None):
     r"""Design a servo controller from an identified or known model.
 
@@ -455,15 +412,23 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         load that coasts is not kicked past the reference).
     feedforward_from : {'auto', 'model', 'baseline'}, optional
         What the feedforward inverts, for an identification result of a
-        sandwich (whose linear baseline the feedback is always designed
-        on): the sandwich's :math:`\bar m L_1 L_2` ('model'), the
-        baseline, or by default the sandwich's when L1 does not integrate,
+        sandwich: the sandwich's :math:`\bar m L_1 L_2` ('model'), the
+        baseline, or by default the sandwich's when L2 integrates (see
+        `feedback_from`), or when L1 does not integrate,
         L1 L2 has no zero outside the unit circle that its inverse could
         not follow (sampling zeros with a real part below -0.5, and zeros
         far enough out for their anticausal series to fit in
         `max_preview` samples, aside) and the sandwich fits at least 2 points
         better than the baseline (the play then distorts the baseline's
         dynamics).
+    feedback_from : {'auto', 'model', 'baseline'}, optional
+        What the feedback is designed on, for an identification result of
+        a sandwich: its linear baseline, which carries the play's effect
+        on the loop (by default), or the sandwich's :math:`\bar m L_1 L_2`
+        ('model', and by default when L2 integrates: a linear model
+        cannot follow the drift that play puts through an integrator
+        after it, and its baseline then has a crossover far too slow or
+        the wrong sign; the feedforward then inverts the sandwich's too).
     adapt : bool, optional
         Whether the band's gain g (the share compensated is
         ``band_fraction * g``, g = 1 at rest) is estimated online from the
@@ -519,8 +484,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     if not 0 < mm < 1:
         raise ValueError(f"modulus_margin must be in (0, 1); got {mm!r}")
     check_option('feedforward', feedforward, ('preview', 'zpetc', None))
-    check_option('feedforward_from', feedforward_from,
-                 ('auto', 'model', 'baseline'))
+    for key, choice in (('feedforward_from', feedforward_from),
+                        ('feedback_from', feedback_from)):
+        check_option(key, choice, ('auto', 'model', 'baseline'))
     check_option('adapt', adapt, (None, True, False))
     max_preview = check_int('max_preview', max_preview, minimum=0,
                             maximum=MAX_ORDER)
@@ -531,7 +497,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                          f"{operating_point!r}")
     u0, y0 = (check_finite('operating_point', v) for v in operating_point)
     notes = []
-    model = _cancel_drift(model, notes)
+    model = sd.cancel_drift(model, notes)
     if isinstance(model, SandwichSystem):
         co = model.coefficients
         mbar = 0.5 * (co['m1'] + co['m2'])
@@ -540,27 +506,12 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         lin_model = (result.linear.get('model') if result is not None
                      and isinstance(getattr(result, 'linear', None), dict)
                      else None)
-        lin_model = _cancel_drift(lin_model, notes)
+        lin_model = sd.cancel_drift(lin_model, notes)
         integrating = bool(np.any(np.abs(np.roots(L1d) - 1) < 1e-6))
-        baseline_note = pid = None
-        if isinstance(lin_model, ct.TransferFunction):
-            try:
-                pid = sd.design_pid(*_check_plant_tf('the baseline',
-                                                     lin_model),
-                                    lin_model.dt, mm)
-            except ValueError as exc:
-                # the sandwich is what identify vouched for: design on it
-                lin_model = None
-                baseline_note = (f"the result's linear baseline cannot be "
-                                 f"designed on ({exc}), so ")
         ff_zeros = np.concatenate([model.L1.zeros(), model.L2.zeros()])
-        ff_model, linear_note = sd.feedforward_source(
-            feedforward_from, result, lin_model, integrating, ff_zeros,
-            max_preview)
-        P = (lin_model if isinstance(lin_model, ct.TransferFunction)
-             else mbar * model.L1 * model.L2)
-        if baseline_note:
-            linear_note = baseline_note + linear_note
+        P, pid, ff_model, linear_note, lin_model = sd.linear_part(
+            model, result, lin_model, feedback_from, feedforward_from,
+            integrating, ff_zeros, max_preview, mm, _check_plant_tf)
     else:
         P, linear_note, pid = model, None, None
     num, den = _check_plant_tf('model' if P is model else 'the design plant',
