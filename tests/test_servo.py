@@ -319,6 +319,31 @@ def test_an_integrator_after_the_play_is_designed_on_the_sandwich():
                in n for n in mine.notes)
 
 
+def test_a_baseline_moving_the_other_way_is_not_designed_on():
+    """A baseline whose low-frequency gain has the sign opposite to the
+    sandwich's (random_case(12, integrating=True): a pole at 0.999 and a
+    zero at 1.0007 spent on the drift flipped it, and its PD left the
+    plant's loop unstable, 49 travels of RMS error) is not designed on:
+    the sandwich's own mbar L1 L2 is, and the notes say why."""
+    import types
+    plant = sw.examples.paper_plant()
+    co = plant.coefficients
+    own = 0.5 * (co['m1'] + co['m2']) * plant.L1 * plant.L2
+    flipped = ct.tf(-own.num[0][0], own.den[0][0], own.dt)
+    result = types.SimpleNamespace(model=plant, success=True, fit=90.0,
+                                   linear=dict(model=flipped, fit=80.0))
+    ctrl = sw.servo_controller(result)
+    P = ctrl.design_plant
+    assert np.isclose(np.polyval(P.num[0][0], 1.3)
+                      / np.polyval(P.den[0][0], 1.3), own(1.3))
+    assert any("opposite ways at low frequency" in n for n in ctrl.notes)
+    r = np.r_[np.zeros(20), np.ones(200), -np.ones(200)]
+    y = sw.closed_loop_response(plant, r, ctrl).outputs[0]
+    assert np.sqrt(np.mean((r - y)[-100:] ** 2)) < 0.05
+    asked = sw.servo_controller(result, feedback_from='baseline')
+    assert asked.design_plant is flipped
+
+
 def test_an_integrating_l1_gets_its_band_jump_spread_over_the_loop():
     """With an integrator in L1, L1^-1 turns the band jump into a speed
     pulse: by default it is spread over at least two time constants of the

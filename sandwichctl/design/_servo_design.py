@@ -500,6 +500,12 @@ def feedforward_source(choice, result, integrating, zeros, max_preview):
                     f"{_fmt_roots(zeros[far])}" if far.any() else ""))
 
 
+def _arrays(sys):
+    """(num, den) of a SISO transfer function, leading zeros trimmed."""
+    return (np.trim_zeros(sys.num[0][0].astype(float), 'f'),
+            sys.den[0][0].astype(float))
+
+
 def linear_part(model, result, lin_model, feedback_from, feedforward_from,
                 integrating, zeros, max_preview, mm, check_plant):
     """The linear part of a sandwich's design: (P, pid, ff_model, note,
@@ -515,7 +521,10 @@ def linear_part(model, result, lin_model, feedback_from, feedforward_from,
     not when L2 integrates: a linear model cannot follow the drift the
     play puts through an integrator after it, and spends a slow pole and
     zero on it (step 5 of docs/algorithm.md), often with the wrong sign
-    or a crossover hundreds of times too slow."""
+    or a crossover hundreds of times too slow; nor when the baseline's
+    low-frequency gain has the sign opposite to the sandwich's (with an
+    integrator in L1 and unequal slopes it can spend such a pair on the
+    drift too, and its PD then pushes the plant the wrong way)."""
     for name, choice in (('feedback_from', feedback_from),
                          ('feedforward_from', feedforward_from)):
         if choice == 'baseline' and not isinstance(lin_model,
@@ -534,6 +543,13 @@ def linear_part(model, result, lin_model, feedback_from, feedforward_from,
             "baseline cannot follow (it spends a slow pole and zero on the "
             "play's drift), so linear part designed on the model's mbar L1 "
             "L2"), None
+    if feedback_from == 'auto' and (low_frequency_sign(*_arrays(lin_model))
+                                    != low_frequency_sign(*_arrays(own))):
+        return own, None, True, (
+            "the result's linear baseline and the sandwich's mbar L1 L2 "
+            "move the output opposite ways at low frequency (the baseline "
+            "spent a pole and zero near z = 1 on the play's drift), so "
+            "linear part designed on the model's mbar L1 L2"), None
     pid, fb_why = None, ''
     if feedback_from != 'model':
         try:

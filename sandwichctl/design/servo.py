@@ -22,7 +22,8 @@ linear design's), and the feedforward inverts the sandwich's own
 play before a cylinder) both are designed on :math:`\bar m L_1 L_2`: no
 linear model follows the drift the play puts through an integrator after
 it, and the baseline spends a slow pole and zero on it (see
-``feedback_from``). The band offset of the inverse
+``feedback_from``); so they are when the baseline's low-frequency gain
+has the sign opposite to the sandwich's (such a pair flipped it). The band offset of the inverse
 reaches the plant through the DC gains of L1 and L2 (their fitted fast
 dynamics, inverted, would turn the offset's jump into ringing).
 
@@ -428,7 +429,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         ('model', and by default when L2 integrates: a linear model
         cannot follow the drift that play puts through an integrator
         after it, and its baseline then has a crossover far too slow or
-        the wrong sign; the feedforward then inverts the sandwich's too).
+        the wrong sign; and when the baseline's low-frequency gain has the
+        sign opposite to the sandwich's; the feedforward then inverts the
+        sandwich's too).
     adapt : bool, optional
         Whether the band's gain g (the share compensated is
         ``band_fraction * g``, g = 1 at rest) is estimated online from the
