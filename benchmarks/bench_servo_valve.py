@@ -13,7 +13,9 @@ plant's samples read as 10 ms, so a hold lasts 100 samples):
   with L2 integrating, the feedback and the feedforward are designed on
   the sandwich's mbar L1 L2);
 - ``servo_controller(result, feedback_from='baseline')``: the feedback on
-  the result's linear baseline, as every identified sandwich had before;
+  the result's linear baseline, as every identified sandwich had before
+  (its feedforward is checked on the model as the default's is, which
+  the old default did not do);
 - ``servo_controller(case.plant)``: the plant itself known (the limit).
 
 With ``--integrator L1`` the cases are

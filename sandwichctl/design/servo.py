@@ -421,7 +421,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         far enough out for their anticausal series to fit in
         `max_preview` samples, aside) and the sandwich fits at least 2 points
         better than the baseline (the play then distorts the baseline's
-        dynamics).
+        dynamics). With 'auto', a feedforward that makes the loop around
+        the identified model 1.25 times worse than feedback alone gives
+        way to the other linear model's, or to none (the notes say so).
     feedback_from : {'auto', 'model', 'baseline'}, optional
         What the feedback is designed on, for an identification result of
         a sandwich: its linear baseline, which carries the play's effect
@@ -481,6 +483,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     >>> bool(abs(resp.outputs[0][-1] - 1) < 1e-3)
     True
     """
+    asked = {k: v for k, v in locals().items() if k != 'model'}
+    source = model
     model, result = _unwrap_model(model)
     band_by_default = band_fraction is None
     mm = check_finite('modulus_margin', modulus_margin)
@@ -692,6 +696,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         notes.append(f"compensation turned off: with it, tracking on the "
                      f"identified model itself was over {HARM:g} times "
                      f"worse than without (pass band_fraction to force it)")
+    if comp and result is not None and feedforward_from == 'auto' and \
+            lin_model is not None:
+        ctrl = _feedforward_checked(ctrl, source, model, asked, ff_model)
     return ctrl
 
 
@@ -729,6 +736,39 @@ def _helps_on_model(ctrl, model):
         err = float(np.sqrt(np.mean((r - y) ** 2)))
         errors.append(err if np.isfinite(err) else np.inf)
     return errors[0] <= HARM * errors[1]
+
+
+def _loop_error(ctrl, model, r):
+    """RMS error of `ctrl` around `model` for the reference r (inf if the
+    loop blows up)."""
+    with np.errstate(all='ignore'), warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        y = servo_loop(model, r, ctrl)[0]
+    err = float(np.sqrt(np.mean((r - y) ** 2)))
+    return err if np.isfinite(err) else np.inf
+
+
+def _feedforward_checked(ctrl, source, model, asked, ff_model):
+    """`ctrl`, unless its linear feedforward makes the loop around the
+    identified model `HARM` times worse than feedback alone: then the
+    design that inverts the other linear model, or failing that the one
+    without feedforward, with a note (a baseline that fits far worse than
+    the sandwich can ask for inputs hundreds of times too large)."""
+    r = sd.design_reference(model, 20, ctrl.dt)
+    bare = servo_controller(source, **{**asked, 'feedforward': None})
+    e, e_bare = _loop_error(ctrl, model, r), _loop_error(bare, model, r)
+    if e <= HARM * e_bare:
+        return ctrl
+    which = "sandwich's mbar L1 L2" if ff_model else "baseline"
+    other = servo_controller(source, **{**asked, 'feedforward_from':
+                                        'baseline' if ff_model else 'model'})
+    pick = other if _loop_error(other, model, r) <= HARM * e_bare else bare
+    pick.notes.append(
+        f"the feedforward inverting the {which} made tracking on the "
+        f"identified model {e / e_bare:.3g} times worse than feedback alone: "
+        + ("the other linear model is inverted" if pick is other else
+           "no feedforward") + " (pass feedforward_from to force it)")
+    return pick
 
 
 def _ff_note(kind, preview, approx, linear_note):
