@@ -587,8 +587,7 @@ def cancel_unit_pair(sys):
     it (within `UNIT_CANCEL`), when no other pole is that close to 1; its
     high-frequency gain is kept. Returns
     (sys, the zero cancelled or None)."""
-    num = np.trim_zeros(sys.num[0][0].astype(float), 'f')
-    den = sys.den[0][0].astype(float)
+    num, den = _arrays(sys)
     if num.size < 2 or den.size < 2:
         return sys, None
     poles, zeros = np.roots(den), np.roots(num)

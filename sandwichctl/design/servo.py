@@ -514,7 +514,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                      and isinstance(getattr(result, 'linear', None), dict)
                      else None)
         lin_model = sd.cancel_drift(lin_model, notes)
-        integrating = bool(np.any(np.abs(np.roots(L1d) - 1) < 1e-6))
+        integrating = sd.integrates(model.L1)
         ff_zeros = np.concatenate([model.L1.zeros(), model.L2.zeros()])
         P, pid, ff_model, linear_note, lin_model = sd.linear_part(
             model, result, lin_model, feedback_from, feedforward_from,
@@ -683,8 +683,12 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         notes.append("designed from an identification result that is not "
                      "a success: check the model first")
     ctrl = ServoController(design, name=name)
-    if comp and result is not None and band_by_default and \
-            band_fraction > 0 and not _helps_on_model(ctrl, model):
+    # an identified sandwich's choices are checked around the model, for
+    # a reference travelling 20 of its bands
+    checked = comp and result is not None
+    r = sd.design_reference(model, 20, dt) if checked else None
+    if checked and band_by_default and band_fraction > 0 and \
+            not _helps_on_model(ctrl, model, r):
         # the compensation must at least help on the model it came from
         ctrl._p[_scalar_index(ctrl) + 2:_scalar_index(ctrl) + 4] = 0.0
         ctrl.band_fraction = 0.0
@@ -696,9 +700,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         notes.append(f"compensation turned off: with it, tracking on the "
                      f"identified model itself was over {HARM:g} times "
                      f"worse than without (pass band_fraction to force it)")
-    if comp and result is not None and feedforward_from == 'auto' and \
-            lin_model is not None:
-        ctrl = _feedforward_checked(ctrl, source, model, asked, ff_model)
+    if checked and feedforward_from == 'auto' and lin_model is not None:
+        ctrl = _feedforward_checked(ctrl, source, model, asked, ff_model, r)
     return ctrl
 
 
@@ -721,20 +724,15 @@ JUMP_MOST = 500
 HARM = 1.25
 
 
-def _helps_on_model(ctrl, model):
+def _helps_on_model(ctrl, model, r):
     """Whether the band offset does not make the RMS error of the loop
-    around the identified model `HARM` times worse, for a reference that
-    travels 20 bands."""
-    r = sd.design_reference(model, 20, ctrl.dt)
+    around the identified model `HARM` times worse, for the reference r
+    (`sd.design_reference` travelling 20 bands)."""
     errors = []
     for scale in (1.0, 0.0):
         trial = ServoController(ctrl._design)
         trial._p[_scalar_index(trial) + 2:_scalar_index(trial) + 4] *= scale
-        with np.errstate(all='ignore'), warnings.catch_warnings():
-            warnings.simplefilter('ignore')
-            y = servo_loop(model, r, trial)[0]
-        err = float(np.sqrt(np.mean((r - y) ** 2)))
-        errors.append(err if np.isfinite(err) else np.inf)
+        errors.append(_loop_error(trial, model, r))
     return errors[0] <= HARM * errors[1]
 
 
@@ -748,13 +746,13 @@ def _loop_error(ctrl, model, r):
     return err if np.isfinite(err) else np.inf
 
 
-def _feedforward_checked(ctrl, source, model, asked, ff_model):
+def _feedforward_checked(ctrl, source, model, asked, ff_model, r):
     """`ctrl`, unless its linear feedforward makes the loop around the
-    identified model `HARM` times worse than feedback alone: then the
-    design that inverts the other linear model, or failing that the one
-    without feedforward, with a note (a baseline that fits far worse than
-    the sandwich can ask for inputs hundreds of times too large)."""
-    r = sd.design_reference(model, 20, ctrl.dt)
+    identified model `HARM` times worse than feedback alone for the
+    reference r: then the design that inverts the other linear model, or
+    failing that the one without feedforward, with a note (a baseline
+    that fits far worse than the sandwich can ask for inputs hundreds of
+    times too large)."""
     bare = servo_controller(source, **{**asked, 'feedforward': None})
     e, e_bare = _loop_error(ctrl, model, r), _loop_error(bare, model, r)
     if e <= HARM * e_bare:
