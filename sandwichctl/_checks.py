@@ -114,6 +114,16 @@ def check_positive(name, value):
     return value
 
 
+def check_tolerance(name, value):
+    """Return `value` as float, requiring 0 < value < 1: a relative
+    tolerance (1 or more would stop an iteration before its first step)."""
+    value = check_positive(name, value)
+    if value >= 1:
+        raise ValueError(f"{name} must be below 1 (a relative tolerance); "
+                         f"got {value!r}")
+    return value
+
+
 def check_nonnegative(name, value):
     """Return `value` as float, requiring 0 <= value < inf."""
     value = _as_real_scalar(name, value)

@@ -72,6 +72,14 @@ def _nan_at(k, n=N):
     return x
 
 
+def _steps_to_overflow():
+    """Steps the paper plant's controller with inputs near the largest
+    float until its output overflows (the third step)."""
+    ctrl = sw.servo_controller(PLANT)
+    for _ in range(4):
+        ctrl.step(1e308, -1e308)
+
+
 def _file(tmp, name, content):
     path = tmp / name
     if isinstance(content, bytes):
@@ -606,6 +614,11 @@ ROWS = [
      lambda t: sw.servo_controller(PLANT).run(U, U[:3]), VE, 'y'),
     ('ServoController-step',
      lambda t: sw.servo_controller(PLANT).step(0.0, np.nan), VE, 'finite'),
+    ('ServoController-step-overflow',
+     lambda t: _steps_to_overflow(), OverflowError, 'reset'),
+    ('ServoController-run-overflow',
+     lambda t: sw.servo_controller(PLANT).run([1e308] * 4, [-1e308] * 4),
+     OverflowError, 'sample 2'),
     ('closed_loop_response-servo-plant-nan',
      lambda t: sw.closed_loop_response(_NanPlant(), U,
                                        sw.servo_controller(PLANT)), VE,
@@ -813,6 +826,20 @@ ROWS = [
     ('select_structure-minimum_phase',
      lambda t: sw.select_structure((UL, YL), minimum_phase='L2'), VE,
      'minimum_phase'),
+    ('select_structure-integrators',
+     lambda t: sw.select_structure((UL, YL), integrators='x'), VE,
+     'integrators'),
+    ('select_structure-option-unknown',
+     lambda t: sw.select_structure((UL, YL), bogus=1), TE, 'bogus'),
+    ('select_structure-option-method',
+     lambda t: sw.select_structure((UL, YL), method='bundle',
+                                   integrators=1), TE, 'integrators'),
+    ('identify-tol-huge',
+     lambda t: sw.identify(UL, YL, **ORD, tol=1e308), VE, 'tol'),
+    ('identify_linear-tol-one',
+     lambda t: sw.identify_linear(UL, YL, nb=1, nf=2, tol=1.0), VE, 'tol'),
+    ('refine-tol-huge', lambda t: sw.refine(PLANT, U, Y, tol=1e308), VE,
+     'tol'),
     ('identify-minimum_phase',
      lambda t: sw.identify(UL, YL, **ORD, minimum_phase=True), VE,
      'minimum_phase'),
@@ -878,6 +905,10 @@ ROWS = [
      lambda t: sw.data.servo_drive(U, seed=2.5), TE, 'seed'),
     ('data.servo_drive-substeps',
      lambda t: sw.data.servo_drive(U, substeps=10 ** 9), VE, 'substeps'),
+    ('data.servo_drive-friction-huge',
+     lambda t: sw.data.servo_drive(U, Fc=1e308), VE, 'Fc'),
+    ('data.ServoDrive-mass-tiny',
+     lambda t: sw.data.ServoDrive(M=1e-300), VE, 'M'),
     ('data.ServoDrive-n-huge', lambda t: sw.data.ServoDrive(n=BIG ** 2), VE,
      'n'),
     ('data.ServoDrive-seed', lambda t: sw.data.ServoDrive(seed=-1), VE,

@@ -106,6 +106,11 @@ DRIVE_PARAMETERS = {
 
 _NONNEGATIVE = ('B', 'c', 'Fc', 'b', 'Ki_pos', 'torque_noise')
 _INTEGER = {'counts': 0, 'substeps': 1}
+#: a physical parameter may lie this many times above or below its
+#: default (Ki_pos, 0 by default, up to this many times Kp**2): wider than
+#: any drive of this kind, and narrow enough that no force or gain
+#: overflows the simulation into a finite nonsense
+SPAN = 1e6
 #: most sub-steps a sample (random_drive draws at most a few hundred)
 MOST_SUBSTEPS = 10_000
 #: most samples a drive is set up for or a reference drawn (800 MB)
@@ -142,6 +147,15 @@ def _params(params):
             out[key] = check_nonnegative(label, value)
         else:
             out[key] = check_positive(label, value)
+    for key, (default, unit, _) in DRIVE_PARAMETERS.items():
+        if key in _INTEGER or key == 'contact':
+            continue
+        ref = default if default else DRIVE_PARAMETERS['Kp'][0] ** 2
+        if out[key] > SPAN * ref or 0 < out[key] < ref / SPAN:
+            off = ' (or be 0)' if key in _NONNEGATIVE else ''
+            raise ValueError(
+                f"{key} [{unit}] must lie within {SPAN:.0e} times "
+                f"{ref:g} either way{off}; got {out[key]!r}")
     if not 1.0 <= out['contact'] <= 3.0:
         raise ValueError(f"contact [1] must be in [1, 3] (1: linear, 1.5: "
                          f"Hertzian); got {out['contact']!r}")

@@ -243,14 +243,21 @@ class ServoController(ct.NonlinearIOSystem):
             raise ValueError(f"r_ahead and y must be finite; got "
                              f"r_ahead={r!r}, y={yk!r} (the controller's "
                              f"memory is unchanged)")
-        return servo_step(self._p, self._ix, self._s, r, yk)
+        u = servo_step(self._p, self._ix, self._s, r, yk)
+        if not math.isfinite(u):
+            _overflow(None)
+        return u
 
     def run(self, r_ahead, y):
         """`step` over given sequences from the current memory (open loop:
         y is recorded, not simulated); returns u."""
-        return servo_run(self._p, self._ix, self._s,
-                         check_signal('r_ahead', r_ahead),
-                         check_signal('y', y, np.size(r_ahead)))
+        u = servo_run(self._p, self._ix, self._s,
+                      check_signal('r_ahead', r_ahead),
+                      check_signal('y', y, np.size(r_ahead)))
+        bad = np.flatnonzero(~np.isfinite(u))
+        if bad.size:
+            _overflow(int(bad[0]))
+        return u
 
     @property
     def state(self):
@@ -304,6 +311,15 @@ class ServoController(ct.NonlinearIOSystem):
         return head + ")\n" + "\n".join(f"  - {n}" for n in self.notes)
 
     __str__ = __repr__
+
+
+def _overflow(k):
+    """Raise for an input that overflowed the controller at sample k."""
+    where = '' if k is None else f" at sample {k}"
+    raise OverflowError(
+        f"u overflowed{where}: r_ahead or y is too large for the "
+        f"controller's gains (scale the data as the design's model was "
+        f"identified); call reset() before the next step")
 
 
 def _rebuild(design, name, state, operating_point):

@@ -15,7 +15,7 @@ import numpy as np
 
 from .result import MIN_FIT
 from .._checks import (check_bool, check_finite, check_int, check_nonnegative,
-                       check_option, check_positive)
+                       check_option, check_positive, check_tolerance)
 
 __all__ = []
 
@@ -87,7 +87,8 @@ class OEOptions(_Options):
         leading samples the screening uses (step 6).
     max_iter : int
     tol : float
-        Levenberg-Marquardt's iterations and tolerance to convergence.
+        Levenberg-Marquardt's iterations and relative tolerance to
+        convergence (0 < tol < 1).
     refits : int
         L2 re-fits per converged start (step 7).
     smooth : bool
@@ -152,7 +153,7 @@ class OEOptions(_Options):
         for name, minimum in self._MINIMA.items():
             self._set(name, check_int(name, getattr(self, name), minimum))
         self._set('smooth', check_bool('smooth', self.smooth))
-        self._set('tol', check_positive('tol', self.tol))
+        self._set('tol', check_tolerance('tol', self.tol))
         self._set('min_fit', float(self.min_fit))
 
     def search(self):

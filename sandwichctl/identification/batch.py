@@ -51,7 +51,8 @@ from ._lm import lm
 from ._problem import Problem, unit_poles
 from ._starts import admissible, perturb
 from ..model.sandwich import SandwichSystem
-from .._checks import check_int, check_positive, progress_bar, serial_blas
+from .._checks import (check_int, check_positive, check_tolerance,
+                       progress_bar, serial_blas)
 
 __all__ = ['refine']
 
@@ -76,7 +77,7 @@ def refine(model, u, y=None, max_iter=100, tol=1e-10, n_starts=1,
         Maximum Levenberg-Marquardt iterations per start (default 100).
     tol : float, optional
         Stop when the relative decrease of the cost, or the relative
-        step, falls below tol.
+        step, falls below tol (0 < tol < 1).
     n_starts : int, optional
         Number of starts: the model itself plus ``n_starts - 1`` random
         perturbations of it (default 1). The best final cost wins.
@@ -118,7 +119,7 @@ def refine(model, u, y=None, max_iter=100, tol=1e-10, n_starts=1,
     us, ys, _, offset_info, estimate = prepare(u, y, model.dt, offsets)
     max_iter = check_int('max_iter', max_iter, minimum=1)
     n_starts = check_int('n_starts', n_starts, minimum=1)
-    tol = check_positive('tol', tol)
+    tol = check_tolerance('tol', tol)
     spread = check_positive('spread', spread)
     m_min = check_positive('m_min', m_min)
     norm = model.normalized()

@@ -39,7 +39,8 @@ from scipy.optimize import OptimizeResult
 
 from ._data import prepare, scale, scaled
 from ._linear import fit_oe_auto, fit_output, max_root, RADIUS
-from .._checks import check_int, check_positive, check_dt, serial_blas
+from .._checks import (check_int, check_positive, check_tolerance, check_dt,
+                       serial_blas)
 from .._checks import check_data_scale
 
 __all__ = ['identify_linear', 'LinearIdentificationResult']
@@ -187,7 +188,8 @@ def identify_linear(u, y=None, nb=None, nf=None, nk=1, dt=True,
         Maximum Levenberg-Marquardt iterations (default 100).
     tol : float, optional
         Stop when the relative decrease of the cost, actual or predicted
-        by the Gauss-Newton model, falls below tol (default 1e-10).
+        by the Gauss-Newton model, falls below tol (0 < tol < 1, default
+        1e-10).
     name : str, optional
         Name of the returned TransferFunction.
     offsets : {'none', 'mean', 'estimate'}, optional
@@ -231,7 +233,7 @@ def identify_linear(u, y=None, nb=None, nf=None, nk=1, dt=True,
     n = sum(part.size for part in us)
     nb, nf, nk, integrators = _check_orders(n, nb, nf, nk, integrators)
     max_iter = check_int('max_iter', max_iter, minimum=1)
-    tol = check_positive('tol', tol)
+    tol = check_tolerance('tol', tol)
     if name is not None and not isinstance(name, str):
         raise TypeError(f"name must be a string or None; got "
                         f"{type(name).__name__} {name!r}")

@@ -32,9 +32,9 @@ from html import escape
 
 import numpy as np
 
-from ._options import check_minimum_phase
+from ._options import check_minimum_phase, OEOptions
 from .linear import identify_linear
-from .pipeline import identify
+from .pipeline import identify, _method_options
 from ..tools.experiments import _check_dt, as_experiments
 from ..tools.residuals import _simulate
 from ..tools.validation import fit_percent
@@ -473,6 +473,14 @@ def _check_arguments(criterion, include_linear, identify_options):
             f"free run from rest on the same centred data; got offsets="
             f"{offsets!r}. Remove offsets another way before the search if "
             f"means do not suit the data")
+    # every row would fail alike on a wrong identify option: refuse it
+    # here, once, instead of ranking a table of failures
+    options = {k: v for k, v in identify_options.items()
+               if k not in ('dt', 'offsets', 'name', 'method')}
+    given = {k: options.pop(k) for k in list(options)
+             if k in ('theta0', 'refine') + OEOptions.ARGUMENTS}
+    _method_options(identify_options.get('method', 'oe'), options, 'mean',
+                    given)
 
 
 def _read(data, validation, dt):
