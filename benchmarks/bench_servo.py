@@ -32,11 +32,14 @@ margin, is what bounds them) and runs that on the drive too. With
 ``--sources``, where the default feedforward inverts the sandwich's own
 linear part mbar L1 L2, it also runs the sandwich design with
 ``feedforward_from='model'`` and ``'baseline'`` (the linear baseline
-inverted, the same feedback and band) and prints both ratios.
+inverted, the same feedback and band) and prints both ratios. With
+``--mismatch`` it also runs both designs on drives that are not the one
+identified (`MISMATCH`: a heavier load with less friction, a stiffer
+inner loop, less and more play) and counts the hunting there.
 
 Run: python benchmarks/bench_servo.py [--seeds 2] [--random 8] [--sweep]
      [--seed0 2 --random0 8] [--feedforward zpetc] [--bands]
-     [--to-margin] [--sources]
+     [--to-margin] [--sources] [--mismatch] [--crossover 2]
 """
 
 import argparse
@@ -98,6 +101,27 @@ def cases(seeds, randoms, loops, seed0=0, random0=0):
                d['params'], 100 + seed)
 
 
+#: drives that differ from the one identified, for --mismatch: a load
+#: twice as heavy with a third of the friction (it coasts further into
+#: the gap), an inner loop 1.25 times stiffer, and half or 1.5 times the
+#: play
+MISMATCH = (('heavier', 1.0, dict(M=2.0, Fc=1 / 3)),
+            ('stiffer', 1.0, dict(Kp=1.25, Kv=1.25)),
+            ('play x0.5', 0.5, {}),
+            ('play x1.5', 1.5, {}))
+
+
+def mismatched(play, params):
+    """(label, play, params) of the drives of `MISMATCH`."""
+    base = {k: v[0] for k, v in sw.data.DRIVE_PARAMETERS.items()}
+    base.update(params)
+    for label, f_play, scale in MISMATCH:
+        if f_play != 1.0 and play == 0.0:
+            continue
+        yield label, f_play * play, dict(
+            params, **{k: base[k] * f for k, f in scale.items()})
+
+
 def to_margin(ctrl, target=0.6, most=4.0):
     """The largest factor (at most `most`) on the design's PID gains that
     keeps the model's modulus margin at `target` (servo_controller's
@@ -139,12 +163,22 @@ def main():
                     help="also run the sandwich design with its feedforward "
                     "inverting the model's mbar L1 L2 and the linear "
                     "baseline, where the default picks the model's")
+    ap.add_argument('--mismatch', action='store_true',
+                    help='also run both designs on drives that differ from '
+                    'the one identified (MISMATCH)')
+    ap.add_argument('--crossover', type=float, default=None,
+                    help="the PID's crossover limit in plant bandwidths "
+                    "(CROSSOVER_LIMIT['pid'] of sandwichctl.design."
+                    "_servo_design), to compare with the default")
     ap.add_argument('--feedforward', default='preview',
                     choices=['preview', 'zpetc'],
                     help='how both designs invert zeros outside the unit '
                     'circle')
     args = ap.parse_args()
-    rows, checks, bands, margin, sources = [], [], [], [], []
+    if args.crossover is not None:
+        sd.CROSSOVER_LIMIT['pid'] = args.crossover
+    rows, checks, bands, margin, sources, swept = [], [], [], [], [], []
+    mism = []
     start = time.perf_counter()
     for label, loop, play, dt, params, seed in cases(
             args.seeds, args.random, args.loops.split(','), args.seed0,
@@ -171,6 +205,7 @@ def main():
                 sweep.append(run(scaled, r, loop, 0.0, dt, params,
                                  seed + 500)['rms'])
             best = f"{min(sweep) * 1e6:.1f}"
+            swept.append(m_0['rms'] / min(sweep))
         for name, m in (('linear', m_lin), ('sandwich', m_sw)):
             rows.append([label, f"{play * 1e6:.0f}", name,
                          f"{m['rms'] * 1e6:.1f}", f"{m['max'] * 1e6:.0f}",
@@ -208,6 +243,14 @@ def main():
                            f"{factor:.2f}", f"{m_lin['rms'] * 1e6:.1f}",
                            m_lin['hunting'], f"{m_up['rms'] * 1e6:.1f}",
                            m_up['hunting']])
+        if args.mismatch:
+            for what, p_play, p_params in mismatched(play, params):
+                a = run(c_lin, r, loop, p_play, dt, p_params, seed + 500)
+                b = run(c_sw, r, loop, p_play, dt, p_params, seed + 500)
+                mism.append([label, f"{play * 1e6:.0f}", what,
+                             f"{a['rms'] * 1e6:.1f}", a['hunting'],
+                             f"{b['rms'] * 1e6:.1f}", b['hunting'],
+                             f"{b['rms'] / a['rms']:.2f}"])
         checks.append(dict(label=label, play=play, lin=m_lin, sw=m_sw,
                            res=res))
     print("Servo loops on the simulated drive, servo_controller defaults; "
@@ -235,6 +278,22 @@ def main():
         rb = [c['sw']['rms'] / c['lin']['rms'] for c in big]
         print(f"large play (>= 100 um), {len(big)} drives: RMS ratio median "
               f"{np.median(rb):.2f} (goal <= 0.75)")
+    if swept:
+        print(f"play-free linear design / best swept: median "
+              f"{np.median(swept):.2f}, worst {max(swept):.2f}, within 2 "
+              f"times on {sum(x <= 2 for x in swept)} of {len(swept)} "
+              f"(target <= 2)")
+    if mism:
+        print("\nOn drives that differ from the one identified (RMS um / "
+              "hunt):\n")
+        print_table(['case', 'play', 'drive', 'linear', 'hunt', 'sandwich',
+                     'hunt', 'RMS/lin'], mism)
+        ratio = [float(row[7]) for row in mism]
+        print(f"hunting (>= 3 reversals in a hold): linear "
+              f"{sum(row[4] >= 3 for row in mism)}, sandwich "
+              f"{sum(row[6] >= 3 for row in mism)} of {len(mism)}; "
+              f"sandwich RMS / linear: median {np.median(ratio):.2f}, "
+              f"worst {max(ratio):.2f}")
     if bands:
         print("\nSandwich RMS / linear at fixed band shares:\n")
         print_table(['case', 'play', 'default', 'RMS/lin',

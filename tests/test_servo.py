@@ -200,6 +200,27 @@ def test_servo_loop_on_the_drive_holds_without_hunting(play):
     assert drive.saturated == 0
 
 
+def test_a_play_free_position_pid_uses_the_room_its_margin_leaves():
+    # the crossover limit (2 plant bandwidths) used to bind before the
+    # modulus margin did, and the loop tracked at 5.4 um; it may now reach
+    # 3 bandwidths, never more
+    case = sw.data.drive_case(0, 'position', 0.0, n=3000)
+    lin = sw.identify_linear(case.u, case.y, nb=3, nf=4, nk=1, dt=case.dt)
+    ctrl = sw.servo_controller(lin)
+    P = ctrl.design_plant
+    num, den = np.trim_zeros(P.num[0][0], 'f'), P.den[0][0]
+    w = sd.frequency_grid(den)
+    above = np.nonzero(np.abs(sd.loop_gain(num, den, ctrl.pid, w)) >= 1)[0]
+    ratio = w[above[-1]] / sd.bandwidth(num, den, w)
+    assert 2.2 < ratio <= sd.CROSSOVER_LIMIT['pid'] == 3.0
+    assert ctrl.margins['modulus'] >= 0.6 * (1 - 1e-3)
+    r = sw.servo_reference(case.dt, 1e-3)[:3000]
+    drive = sw.data.ServoDrive('position', 0.0, seed=1, n=r.size)
+    out = sw.closed_loop_response(drive, r, ctrl)
+    m = sw.servo_metrics(r, *out.outputs, case.dt, deadband=1.5e-6)
+    assert m['rms'] < 4.5e-6 and m['hunting'] < 3
+
+
 def test_servo_metrics_counts_reversals_beyond_the_deadband():
     r = np.r_[np.zeros(10), np.ones(400)]
     y = r.copy()
