@@ -70,7 +70,7 @@ import numba
 import numpy as np
 
 from .._checks import (check_int, check_positive, check_nonnegative,
-                       check_option, check_signal)
+                       check_option, check_real, check_signal)
 
 __all__ = ['servo_drive', 'ServoDrive', 'random_drive', 'drive_reference', 'drive_case', 'DriveCase',
            'DRIVE_PARAMETERS', 'DRIVE_DT']
@@ -111,6 +111,8 @@ _INTEGER = {'counts': 0, 'substeps': 1}
 #: any drive of this kind, and narrow enough that no force or gain
 #: overflows the simulation into a finite nonsense
 SPAN = 1e6
+#: most play a drive may have, in m (random_drive draws at most 300 um)
+MOST_PLAY = 0.1
 #: most sub-steps a sample (random_drive draws at most a few hundred)
 MOST_SUBSTEPS = 10_000
 #: most samples a drive is set up for or a reference drawn (800 MB)
@@ -334,12 +336,24 @@ class _Setup:
     params: dict
 
 
+def _check_sample_time(dt):
+    """dt in s, between 1e-9 and 1e3."""
+    dt = check_positive('dt', dt)
+    if not 1e-9 <= dt <= 1e3:
+        raise ValueError(f"dt must be a sample time between 1e-9 and 1e3 "
+                         f"s; got {dt!r}")
+    return dt
+
+
 def _setup(loop, play, dt, seed, n, params):
     """Checked arguments, kernel parameters and the random draws of a run
     of n samples (the torque disturbance, then the encoder offset)."""
     check_option('loop', loop, _LOOPS)
     play = check_nonnegative('play', play)
-    dt = check_positive('dt', dt)
+    if play > MOST_PLAY:
+        raise ValueError(f"play must be at most {MOST_PLAY:g} m (a gap of a "
+                         f"ball-screw drive, in metres); got {play!r}")
+    dt = _check_sample_time(dt)
     p = _params(params)
     rng = _rng('seed', seed)
     disturbance = p['torque_noise'] * rng.standard_normal(n)
@@ -423,7 +437,7 @@ class ServoDrive:
             raise RuntimeError(f"the drive was set up for n = "
                                f"{su.disturbance.size} samples; make it "
                                f"with a larger n")
-        u = float(u)
+        u = float(u) if type(u) in (float, int) else check_real('u', u)
         if not np.isfinite(u):
             raise ValueError(f"u must be finite; got {u}")
         torque = _drive_step(self._state, u, su.position_loop, su.prm,
@@ -502,10 +516,7 @@ def drive_reference(n, loop='position', rng=None, dt=DRIVE_DT):
     """
     n = check_int('n', n, minimum=2, maximum=MOST_SAMPLES)
     check_option('loop', loop, _LOOPS)
-    dt = check_positive('dt', dt)
-    if not 1e-9 <= dt <= 1e3:
-        raise ValueError(f"dt must be a sample time between 1e-9 and 1e3 "
-                         f"s; got {dt!r}")
+    dt = _check_sample_time(dt)
     rng = _rng('rng', rng)
     hold = (max(1, int(0.15 / dt)), max(2, int(0.6 / dt)))
     if loop == 'position':

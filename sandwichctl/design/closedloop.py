@@ -79,12 +79,13 @@ def _closed_loop_kernel(r, r_ahead, Af, Bf, Cf, Df, use_ff, Ac, Bc, Cc, Dc,
 
 
 def _check_loop(plant, controller, compensator):
-    _check_model('plant', plant)
     if not isinstance(controller, TrackingController):
-        raise TypeError(f"controller must be a sw.TrackingController (from "
-                        f"sw.tracking_controller or "
+        raise TypeError(f"controller must be a sw.ServoController (from "
+                        f"sw.servo_controller) or a sw.TrackingController "
+                        f"(from sw.tracking_controller or "
                         f"sw.TrackingController.from_feedback); got "
                         f"{type(controller).__name__}")
+    _check_model('plant', plant)
     dt = common_dt('plant', plant.dt, 'controller', controller.feedback.dt)
     if compensator is not None:
         if not all(hasattr(compensator, a) for a in

@@ -91,8 +91,11 @@ def fit_output(fit, u, nk):
 
 
 def _cost(y, yhat):
-    r = y - yhat
-    c = 0.5 * (r @ r)
+    """Half the sum of squared errors; inf for a diverged output (whose
+    overflow is that answer, not a warning for the user)."""
+    with np.errstate(over='ignore', invalid='ignore'):
+        r = y - yhat
+        c = 0.5 * (r @ r)
     return c if np.isfinite(c) else np.inf
 
 
