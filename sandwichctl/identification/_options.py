@@ -154,7 +154,7 @@ class OEOptions(_Options):
             self._set(name, check_int(name, getattr(self, name), minimum))
         self._set('smooth', check_bool('smooth', self.smooth))
         self._set('tol', check_tolerance('tol', self.tol))
-        self._set('min_fit', float(self.min_fit))
+        self._set('min_fit', check_finite('min_fit', self.min_fit))
 
     def search(self):
         """The search's options as a dict (``res.options``)."""

@@ -51,8 +51,8 @@ from ._lm import lm
 from ._problem import Problem, unit_poles
 from ._starts import admissible, perturb
 from ..model.sandwich import SandwichSystem
-from .._checks import (check_int, check_positive, check_tolerance,
-                       progress_bar, serial_blas)
+from .._checks import (check_bool, check_int, check_positive,
+                       check_tolerance, progress_bar, serial_blas)
 
 __all__ = ['refine']
 
@@ -118,6 +118,7 @@ def refine(model, u, y=None, max_iter=100, tol=1e-10, n_starts=1,
                         f"{type(model).__name__}")
     us, ys, _, offset_info, estimate = prepare(u, y, model.dt, offsets)
     max_iter = check_int('max_iter', max_iter, minimum=1)
+    progress = check_bool('progress', progress)
     n_starts = check_int('n_starts', n_starts, minimum=1)
     tol = check_tolerance('tol', tol)
     spread = check_positive('spread', spread)
@@ -158,6 +159,6 @@ def _progress_range(n, progress, desc, step=1):
     """range(0, n, step), with a tqdm bar (notebook widget in Jupyter,
     text in a terminal) when asked for."""
     steps = range(0, n, step)
-    if not progress:
+    if not check_bool('progress', progress):
         return steps
     return progress_bar(True, iterable=steps, desc=desc, leave=False)

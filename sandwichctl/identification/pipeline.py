@@ -252,6 +252,10 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     if missing:
         raise TypeError(f"identify needs the orders {missing} (e.g. "
                         f"identify(u, y, na=2, nb=0, nc=2, nd=1))")
+    if refine is not None and not isinstance(refine, (bool, dict)):
+        raise TypeError(f"refine must be True, False, None or a dict of "
+                        f"sw.refine's options; got {type(refine).__name__} "
+                        f"{refine!r}")
     us, ys, dt, offset_info, estimate = prepare(u, y, dt, offsets)
     check_data_scale('u', us), check_data_scale('y', ys)
     opt = _method_options(method, options, offsets, dict(
