@@ -69,8 +69,9 @@ from dataclasses import dataclass, field
 import numba
 import numpy as np
 
-from .._checks import (check_int, check_positive, check_nonnegative,
-                       check_option, check_real, check_signal)
+from .._checks import (check_bool, check_int, check_positive,
+                       check_nonnegative, check_option, check_real,
+                       check_signal)
 
 __all__ = ['servo_drive', 'ServoDrive', 'random_drive', 'drive_reference', 'drive_case', 'DriveCase',
            'DRIVE_PARAMETERS', 'DRIVE_DT']
@@ -311,6 +312,7 @@ def servo_drive(reference, loop='position', play=200e-6, dt=DRIVE_DT,
     1.59
     """
     u = check_signal('reference', reference)
+    internal = check_bool('internal', internal)
     setup = _setup(loop, play, dt, seed, u.size, params)
     out = [np.empty(u.size) for _ in range(5)]
     _drive_kernel(u, setup.position_loop, setup.prm, setup.play, setup.dt,

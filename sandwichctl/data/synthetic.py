@@ -589,5 +589,7 @@ def random_family(n_cases, seed=0, n_range=None):
     >>> [c.case_type for c in random_family(10, seed=2)].count('ordinary')
     8
     """
-    for spec in family_specs(n_cases, seed, n_range):
-        yield random_case(**spec)
+    # the specs are drawn (and the arguments checked) at the call, not at
+    # the first next(): a bad argument raises where it was given
+    specs = family_specs(n_cases, seed, n_range)
+    return (random_case(**spec) for spec in specs)

@@ -117,8 +117,8 @@ def add_noise(y, snr, seed=None, kind='variance'):
     Raises
     ------
     ValueError
-        If `snr` is not a finite number > 0 or `kind` is not one of the
-        three readings.
+        If `snr` is not a finite number > 0, `kind` is not one of the
+        three readings, or y is constant.
 
     Examples
     --------
@@ -141,6 +141,11 @@ def add_noise(y, snr, seed=None, kind='variance'):
                          f"{kind!r}")
     ratio = {'variance': snr, 'amplitude': snr ** 2,
              'db': 10 ** (snr / 10)}[kind]
+    if np.var(y) == 0:
+        raise ValueError("y is constant, so a signal-to-noise ratio gives "
+                         "it no noise; add noise of a chosen standard "
+                         "deviation instead (y + sigma * "
+                         "rng.standard_normal(y.size))")
     rng = np.random.default_rng(seed)
     return y + rng.standard_normal(y.shape) * np.sqrt(np.var(y) / ratio)
 
