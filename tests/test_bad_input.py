@@ -924,6 +924,8 @@ ROWS = [
      lambda t: sw.data.servo_drive(U, dt=1e300), VE, 'dt'),
     ('closed_loop_response-controller-int',
      lambda t: sw.closed_loop_response(L1, [0.0, 1.0], 3), TE, 'controller'),
+    ('steps_and_sines-levels-empty',
+     lambda t: sw.steps_and_sines(100, levels=()), VE, 'levels'),
     ('data.random_family-n_cases',
      lambda t: sw.data.random_family(-1), VE, 'n_cases'),
     ('data.servo_drive-internal-str',

@@ -45,6 +45,9 @@ def steps_and_sines(n=1200, levels=(0.0, 1.0, -0.5, 1.5, 0.3),
     """
     n = check_int('n', n, minimum=2)
     levels = check_vector('levels', levels)
+    if levels.size == 0:
+        raise ValueError("levels must hold at least one level (the first "
+                         "half of the reference steps through them)")
     amplitudes = check_vector('amplitudes', amplitudes)
     periods = check_vector('periods', periods, amplitudes.size)
     if np.any(periods <= 0):
