@@ -190,8 +190,9 @@ def bandwidth(num, den, w):
 #: larger limit made a 12 um speed drive hunt). The PID's was 2: that,
 #: not the modulus margin (0.75 to 0.9 on the model), bounded the position
 #: drives of bench_servo.py, which then tracked 2 to 3 times worse than the
-#: best of a sweep of their gains. At 3 every position drive of its three
-#: sets tracks better and none hunts more; 4 tracked better still on the
+#: best of a sweep of their gains. At 3 its position drives track better
+#: (all but the linear design of one drive with 200 um, 12.1 -> 13.3 um)
+#: and none hunts more; 4 tracked better still on the
 #: drives identified, but hunted on drives with 200 um whose load was
 #: twice as heavy or whose inner loop 1.25 times stiffer than the record's
 #: (bench_servo.py --mismatch)
