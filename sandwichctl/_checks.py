@@ -522,7 +522,7 @@ def progress_bar(enabled, **kwargs):
     notebook without ipywidgets sees no warning unless it shows progress;
     otherwise a disabled plain bar is returned (it does nothing).
     """
-    if check_bool('progress', enabled):
+    if enabled:
         from tqdm.auto import tqdm
         return tqdm(**kwargs)
     from tqdm import tqdm

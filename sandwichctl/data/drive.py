@@ -139,26 +139,24 @@ def _params(params):
             f"unknown servo-drive parameter(s) {unknown}; valid names are "
             f"{sorted(DRIVE_PARAMETERS)} (see DRIVE_PARAMETERS)")
     out = {}
-    for key, (value, unit, _) in DRIVE_PARAMETERS.items():
-        value = params.get(key, value)
+    for key, (default, unit, _) in DRIVE_PARAMETERS.items():
+        value = params.get(key, default)
         label = f"{key} [{unit}]"
         if key in _INTEGER:
             out[key] = check_int(label, value, minimum=_INTEGER[key],
                                  maximum=(MOST_SUBSTEPS if key == 'substeps'
                                           else None))
-        elif key in _NONNEGATIVE:
+            continue
+        if key in _NONNEGATIVE:
             out[key] = check_nonnegative(label, value)
         else:
             out[key] = check_positive(label, value)
-    for key, (default, unit, _) in DRIVE_PARAMETERS.items():
-        if key in _INTEGER or key == 'contact':
-            continue
         ref = default if default else DRIVE_PARAMETERS['Kp'][0] ** 2
-        if out[key] > SPAN * ref or 0 < out[key] < ref / SPAN:
+        if key != 'contact' and (out[key] > SPAN * ref
+                                 or 0 < out[key] < ref / SPAN):
             off = ' (or be 0)' if key in _NONNEGATIVE else ''
-            raise ValueError(
-                f"{key} [{unit}] must lie within {SPAN:.0e} times "
-                f"{ref:g} either way{off}; got {out[key]!r}")
+            raise ValueError(f"{label} must lie within {SPAN:.0e} times "
+                             f"{ref:g} either way{off}; got {out[key]!r}")
     if not 1.0 <= out['contact'] <= 3.0:
         raise ValueError(f"contact [1] must be in [1, 3] (1: linear, 1.5: "
                          f"Hertzian); got {out['contact']!r}")

@@ -508,7 +508,7 @@ def feedforward_source(choice, result, integrating, zeros, max_preview):
                     f"{_fmt_roots(zeros[far])}" if far.any() else ""))
 
 
-def _arrays(sys):
+def tf_arrays(sys):
     """(num, den) of a SISO transfer function, leading zeros trimmed."""
     return (np.trim_zeros(sys.num[0][0].astype(float), 'f'),
             sys.den[0][0].astype(float))
@@ -551,8 +551,8 @@ def linear_part(model, result, lin_model, feedback_from, feedforward_from,
             "baseline cannot follow (it spends a slow pole and zero on the "
             "play's drift), so linear part designed on the model's mbar L1 "
             "L2"), None
-    if feedback_from == 'auto' and (low_frequency_sign(*_arrays(lin_model))
-                                    != low_frequency_sign(*_arrays(own))):
+    if feedback_from == 'auto' and (low_frequency_sign(*tf_arrays(lin_model))
+                                    != low_frequency_sign(*tf_arrays(own))):
         return own, None, True, (
             "the result's linear baseline and the sandwich's mbar L1 L2 "
             "move the output opposite ways at low frequency (the baseline "
@@ -595,7 +595,7 @@ def cancel_unit_pair(sys):
     it (within `UNIT_CANCEL`), when no other pole is that close to 1; its
     high-frequency gain is kept. Returns
     (sys, the zero cancelled or None)."""
-    num, den = _arrays(sys)
+    num, den = tf_arrays(sys)
     if num.size < 2 or den.size < 2:
         return sys, None
     poles, zeros = np.roots(den), np.roots(num)

@@ -78,23 +78,11 @@ def _closed_loop_kernel(r, r_ahead, Af, Bf, Cf, Df, use_ff, Ac, Bc, Cc, Dc,
         y[k], u[k], x[k], v[k] = yk, uk, mem[2], mem[3]
 
 
-def _check_loop(plant, controller, compensator, servo=True):
+def _check_loop(plant, controller, compensator,
+                accepted="a sw.TrackingController"):
     """dt of a loop of a SandwichSystem and a TrackingController (and a
-    compensator); `servo`: whether the caller also takes a ServoController
-    (closed_loop_response does, closed_loop_system does not)."""
+    compensator); `accepted` names the controllers the caller takes."""
     if not isinstance(controller, TrackingController):
-        if servo:
-            accepted = ("a sw.ServoController (from sw.servo_controller) or "
-                        "a sw.TrackingController")
-        elif isinstance(controller, ServoController):
-            raise TypeError("closed_loop_system takes a sw.TrackingController;"
-                            " a sw.ServoController is a python-control "
-                            "system itself (inputs 'r_ahead' and 'y', output "
-                            "'u'): connect it to the plant with "
-                            "ct.interconnect, or run the loop with "
-                            "sw.closed_loop_response")
-        else:
-            accepted = "a sw.TrackingController"
         raise TypeError(f"controller must be {accepted} (from "
                         f"sw.tracking_controller or "
                         f"sw.TrackingController.from_feedback); got "
@@ -156,7 +144,8 @@ def closed_loop_response(plant, reference, controller, compensator=None):
     """
     if isinstance(controller, ServoController):
         return _servo_response(plant, reference, controller, compensator)
-    dt = _check_loop(plant, controller, compensator)
+    dt = _check_loop(plant, controller, compensator, "a sw.ServoController "
+                     "(from sw.servo_controller) or a sw.TrackingController")
     r = check_signal('reference', reference)
     d = controller.preview
     r_ahead = np.concatenate([r[d:], np.full(min(d, r.size), r[-1])])
@@ -265,7 +254,13 @@ def closed_loop_system(plant, controller, compensator=None, name=None):
     >>> bool(np.array_equal(a, b))
     True
     """
-    dt = _check_loop(plant, controller, compensator, servo=False)
+    if isinstance(controller, ServoController):
+        raise TypeError("closed_loop_system takes a sw.TrackingController; a "
+                        "sw.ServoController is a python-control system "
+                        "itself (inputs 'r_ahead' and 'y', output 'u'): "
+                        "connect it to the plant with ct.interconnect, or "
+                        "run the loop with sw.closed_loop_response")
+    dt = _check_loop(plant, controller, compensator)
     name = check_name('name', name)
     parts = (plant, controller, compensator, name)
     d = controller.preview

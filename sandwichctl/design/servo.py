@@ -23,9 +23,10 @@ play before a cylinder) both are designed on :math:`\bar m L_1 L_2`: no
 linear model follows the drift the play puts through an integrator after
 it, and the baseline spends a slow pole and zero on it (see
 ``feedback_from``); so they are when the baseline's low-frequency gain
-has the sign opposite to the sandwich's (such a pair flipped it). The band offset of the inverse
-reaches the plant through the DC gains of L1 and L2 (their fitted fast
-dynamics, inverted, would turn the offset's jump into ringing).
+has the sign opposite to the sandwich's (such a pair flipped it). The
+band offset of the inverse reaches the plant through the DC gains of L1
+and L2 (their fitted fast dynamics, inverted, would turn the offset's
+jump into ringing).
 
 Why the backlash inverse sits in the feedforward
 ------------------------------------------------
@@ -524,8 +525,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     if isinstance(model, SandwichSystem):
         co = model.coefficients
         mbar = 0.5 * (co['m1'] + co['m2'])
-        L1n = np.trim_zeros(model.L1.num[0][0].astype(float), 'f')
-        L1d = model.L1.den[0][0].astype(float)
+        L1n, L1d = sd.tf_arrays(model.L1)
         lin_model = (result.linear.get('model') if result is not None
                      and isinstance(getattr(result, 'linear', None), dict)
                      else None)
@@ -580,8 +580,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         notes.append("no feedforward: feedback only")
     else:
         if comp:
-            Pm = mbar * model.L1 * model.L2
-            Pm = (np.trim_zeros(Pm.num[0][0], 'f'), Pm.den[0][0])
+            Pm = sd.tf_arrays(mbar * model.L1 * model.L2)
         fn, fd, preview, approx = sd.preview_inverse(
             *(Pm if comp and ff_model else (num, den)), feedforward,
             max_preview)
@@ -600,8 +599,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         # exactly along the reference; an identified one gets the band
         # offset through the DC gains (see _static_inverse)
         exact = result is None
-        L2n = np.trim_zeros(model.L2.num[0][0].astype(float), 'f')
-        L2d = model.L2.den[0][0].astype(float)
+        L2n, L2d = sd.tf_arrays(model.L2)
         if exact:
             n2, d2, p2, _ = sd.preview_inverse(L2n, L2d, feedforward,
                                                max_preview)

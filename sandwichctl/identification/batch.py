@@ -159,6 +159,6 @@ def _progress_range(n, progress, desc, step=1):
     """range(0, n, step), with a tqdm bar (notebook widget in Jupyter,
     text in a terminal) when asked for."""
     steps = range(0, n, step)
-    if not check_bool('progress', progress):
+    if not progress:
         return steps
     return progress_bar(True, iterable=steps, desc=desc, leave=False)

@@ -69,7 +69,7 @@ from .recursive import RecursiveIdentifier
 from .result import verdict, judge
 from .._checks import (check_order, warn, serial_blas, SimulationWarning,
                        SandwichWarning, IdentificationWarning)
-from .._checks import check_data_scale, check_parameter_count
+from .._checks import check_bool, check_data_scale, check_parameter_count
 
 __all__ = ['identify']
 
@@ -252,6 +252,7 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     if missing:
         raise TypeError(f"identify needs the orders {missing} (e.g. "
                         f"identify(u, y, na=2, nb=0, nc=2, nd=1))")
+    progress = check_bool('progress', progress)
     if refine is not None and not isinstance(refine, (bool, dict)):
         raise TypeError(f"refine must be True, False, None or a dict of "
                         f"sw.refine's options; got {type(refine).__name__} "

@@ -38,7 +38,7 @@ from .pipeline import identify, _method_options
 from ..tools.experiments import _check_dt, as_experiments
 from ..tools.residuals import _simulate
 from ..tools.validation import fit_percent
-from .._checks import progress_bar
+from .._checks import check_bool, progress_bar
 
 __all__ = ['select_structure', 'StructureTable']
 
@@ -415,7 +415,7 @@ def select_structure(data, orders=None, delays=None, validation=None,
     ['sandwich', 'sandwich', 'linear', 'linear']
     >>> model = table.best_model            # a SandwichSystem, ready to use
     """
-    _check_arguments(criterion, include_linear, identify_options)
+    _check_arguments(criterion, include_linear, progress, identify_options)
     structures = [o + q for o in _grid(orders, _ORDER_KEYS, DEFAULT_ORDERS,
                                        'orders')
                   for q in _grid(delays, _DELAY_KEYS, DEFAULT_DELAYS,
@@ -448,7 +448,7 @@ def select_structure(data, orders=None, delays=None, validation=None,
                               identify_options.get('minimum_phase')))
 
 
-def _check_arguments(criterion, include_linear, identify_options):
+def _check_arguments(criterion, include_linear, progress, identify_options):
     """select_structure's own arguments, and the identify options that
     its grids or its own arguments decide."""
     if criterion not in _CRITERIA:
@@ -457,6 +457,7 @@ def _check_arguments(criterion, include_linear, identify_options):
     if not isinstance(include_linear, bool):
         raise TypeError(f"include_linear must be True or False; got "
                         f"{include_linear!r}")
+    check_bool('progress', progress)
     fixed = set(identify_options) & set(_ORDER_KEYS + _DELAY_KEYS
                                         + ('progress',))
     if fixed:
