@@ -22,8 +22,11 @@ variation against the linear design's (chatter), the most reversals of y
 in the second half of a hold (>= 3 is a limit cycle) and the share of
 ticks at the motor's torque limit. With ``--sweep`` it also scales the
 linear feedback on the play-free drive to find the best linear design of
-the sweep. With ``--bands`` it runs the sandwich design of every drive at
-fixed band shares too, and prints the RMS ratio to the linear design at
+the sweep (the default's gains by 0.25, 0.5, 2 and 4, and those of the
+design at the fixed crossover limit of a model without data by 1, 2 and
+4; a scale whose loop is unstable on the model is skipped). With
+``--bands`` it runs the sandwich design of every drive at fixed band
+shares too, and prints the RMS ratio to the linear design at
 each: the best share per drive bounds what adapting the share online could
 reach, the worst shows what a larger fixed default would risk. With
 ``--to-margin`` it scales the linear design's gains up until the model's
@@ -36,10 +39,14 @@ inverted, the same feedback and band) and prints both ratios. With
 ``--mismatch`` it also runs both designs on drives that are not the one
 identified (`MISMATCH`: a heavier load with less friction, a stiffer
 inner loop, less and more play) and counts the hunting there.
+``--crossover X`` sets the PID's crossover limit of a model without data
+(`CROSSOVER_LIMIT['pid']`), and ``--fixed-crossover`` holds every design
+at it (no extension from the residuals of the record), to compare.
 
 Run: python benchmarks/bench_servo.py [--seeds 2] [--random 8] [--sweep]
      [--seed0 2 --random0 8] [--feedforward zpetc] [--bands]
      [--to-margin] [--sources] [--mismatch] [--crossover 2]
+     [--fixed-crossover]
 """
 
 import argparse
@@ -174,9 +181,15 @@ def main():
                     choices=['preview', 'zpetc'],
                     help='how both designs invert zeros outside the unit '
                     'circle')
+    ap.add_argument('--fixed-crossover', action='store_true',
+                    help="hold the PID's crossover limit at "
+                    "CROSSOVER_LIMIT['pid'] (no extension from the "
+                    "residuals of the data), to compare with the default")
     args = ap.parse_args()
     if args.crossover is not None:
         sd.CROSSOVER_LIMIT['pid'] = args.crossover
+    if args.fixed_crossover:
+        sd.CROSSOVER_MOST = sd.CROSSOVER_LIMIT['pid']
     rows, checks, bands, margin, sources, swept = [], [], [], [], [], []
     mism = []
     start = time.perf_counter()
@@ -197,9 +210,14 @@ def main():
         best = ''
         if args.sweep and play == 0.0:
             sweep = [m_0['rms']]
-            for f in (0.25, 0.5, 2.0, 4.0):
+            # the default's gains scaled, and those of the design at the
+            # fixed crossover limit (whose larger scales the default's
+            # model refuses)
+            for f, kw in [(f, {}) for f in (0.25, 0.5, 2.0, 4.0)] + [
+                    (f, dict(crossover_limit=sd.CROSSOVER_LIMIT['pid']))
+                    for f in (1.0, 2.0, 4.0)]:
                 try:
-                    scaled = sw.servo_controller(lin, feedback_scale=f)
+                    scaled = sw.servo_controller(lin, feedback_scale=f, **kw)
                 except ValueError:      # unstable on the model: not swept
                     continue
                 sweep.append(run(scaled, r, loop, 0.0, dt, params,

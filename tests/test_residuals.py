@@ -161,3 +161,27 @@ def test_bad_models_and_data(noisy):
     with pytest.raises(ValueError, match='constant'):
         sw.residuals(plant, (u[:300], plant.simulate(u[:300]).outputs),
                      plot=False)
+
+
+def test_error_bands_measure_the_relative_error_per_band(rng):
+    from sandwichctl.tools.residuals import error_bands, BANDS_PER_DECADE
+    yhat = np.cumsum(rng.standard_normal(5000))
+    # a residual proportional to the output is that share in every band
+    w, delta = error_bands(0.2 * yhat + 3.0, yhat)
+    np.testing.assert_allclose(delta, 0.2, rtol=1e-9)
+    assert w[0] > 2 * np.pi * 4 / 5000 and w[-1] < np.pi
+    ratio = np.diff(np.log10(w))
+    assert np.all(ratio >= 1 / BANDS_PER_DECADE * (1 - 1e-9))
+    # white noise against a random walk: small at low, larger at high
+    # frequencies
+    w, delta = error_bands(0.05 * rng.standard_normal(5000), yhat)
+    assert delta[0] < 0.01 < 0.05 < delta[-1]
+    assert error_bands(np.ones(10), np.ones(10))[0].size == 0
+
+
+def test_identify_keeps_the_error_bands_of_its_baseline():
+    case = sw.data.drive_case(0, 'position', 0.0, n=2000)
+    res = sw.identify(case.u, case.y, na=1, nb=0, nc=1, nd=0, q1=1, q2=0,
+                      dt=case.dt)
+    w, delta = res.linear['error_bands']
+    assert w.size == delta.size > 10 and np.all(np.isfinite(delta))

@@ -48,6 +48,7 @@ import control as ct
 from ..model.sandwich import SandwichSystem
 from .inverse import _fmt_roots
 from .references import servo_reference
+from ..tools.residuals import error_bands
 
 #: a zero this close to the unit circle or outside counts as unstable
 ZERO_RADIUS = 1.0
@@ -198,6 +199,38 @@ def bandwidth(num, den, w):
 #: (bench_servo.py --mismatch)
 CROSSOVER_LIMIT = {'pid': 3.0, 'pd': 1.0}
 
+#: a PID designed from an identification result may cross over above
+#: CROSSOVER_LIMIT['pid'], up to CROSSOVER_MOST plant bandwidths, as far
+#: as the residuals of its data put the model's relative error below
+#: TRUSTED in every band from the lowest up (`tools.residuals.error_bands`).
+#: The residuals of a drive with much play are large from the bandwidth
+#: up (its limit stays 3: a larger one hunted when the load coasted, see
+#: above); those of a play-free one are not, and there the modulus margin
+#: bound the loop long before the crossover limit did
+TRUSTED = 0.5
+CROSSOVER_MOST = 8.0
+
+
+def crossover_limit(bands, num, den):
+    """(limit, why): the crossover limit of `design_pid` in plant
+    bandwidths for the plant num/den, given the error bands (w, delta) of
+    its data (`tools.residuals.error_bands`, None for a model without
+    data), and why in words."""
+    if np.any(np.abs(np.roots(den) - 1) < 1e-6):
+        return CROSSOVER_LIMIT['pd'], "the PD's of an integrating plant"
+    base = CROSSOVER_LIMIT['pid']
+    if bands is None or len(bands[0]) == 0:
+        return base, 'the default, for a model without data'
+    w, delta = (np.asarray(a, float) for a in bands)
+    wb = bandwidth(num, den, frequency_grid(den))
+    bad = np.nonzero(~(delta <= TRUSTED))[0]
+    trusted = w[-1] if bad.size == 0 else (w[bad[0] - 1] if bad[0] else 0.0)
+    limit = float(np.clip(trusted / wb, base, CROSSOVER_MOST))
+    return limit, (
+        f"the data's residuals put the model's relative error below "
+        f"{TRUSTED:g} up to {trusted / wb:.3g} plant bandwidths "
+        f"(limit {base:g} to {CROSSOVER_MOST:g})")
+
 #: a PD found on the coarse grid is refined on a grid this many times
 #: finer around it
 REFINE = 8
@@ -224,13 +257,26 @@ def low_frequency_sign(num, den):
     return 1.0 if n / d >= 0 else -1.0
 
 
-def design_pid(num, den, dt, modulus_margin):
+def result_bands(result):
+    """The error bands (w, delta) of an identification result's linear
+    fit (`tools.residuals.error_bands`): of `identify_linear`'s from its
+    residuals, of `identify`'s as it stored them for its baseline; None
+    for no result or a result without them."""
+    e, yhat = (getattr(result, key, None) for key in ('residuals', 'yhat'))
+    if e is not None and yhat is not None:
+        return error_bands(e, yhat)
+    linear = getattr(result, 'linear', None)
+    return linear.get('error_bands') if isinstance(linear, dict) else None
+
+
+def design_pid(num, den, dt, modulus_margin, limit=None):
     """PID gains (kp, ki, kd, pole) for the plant num/den (descending
     powers of z, at most one pole at z = 1): the largest ki under the
     modulus margin and with :math:`|T| \\le 1` (no frequency of the
     reference amplified: a peak of T rang on the drives, where friction
     damps the loop less than the model says), with the crossover below
-    `CROSSOVER_LIMIT` times the plant's bandwidth, the derivative's
+    `limit` times the plant's bandwidth (by default `CROSSOVER_LIMIT`;
+    see `crossover_limit`), the derivative's
     high-frequency boost bounded, and a loop that stays stable when its
     gain is lowered (no conditional stability, which a saturating drive
     turns into a limit cycle). An integrating plant gets
@@ -244,7 +290,9 @@ def design_pid(num, den, dt, modulus_margin):
     P = np.polyval(num, z) / np.polyval(den, z)
     wb = bandwidth(num, den, w)
     integrating = np.any(np.abs(np.roots(den) - 1) < 1e-6)
-    high = w > CROSSOVER_LIMIT['pd' if integrating else 'pid'] * wb
+    if limit is None:
+        limit = CROSSOVER_LIMIT['pd' if integrating else 'pid']
+    high = w > limit * wb
     # scale of the gains: 1/|P| at the plant's bandwidth and where its
     # phase first reaches -180 deg, whichever is smaller
     phase = np.unwrap(np.angle(P))
@@ -515,14 +563,16 @@ def tf_arrays(sys):
 
 
 def linear_part(model, result, lin_model, feedback_from, feedforward_from,
-                integrating, zeros, max_preview, mm, check_plant):
+                integrating, zeros, max_preview, mm, check_plant,
+                limit=None):
     """The linear part of a sandwich's design: (P, pid, ff_model, note,
     baseline). P is the plant the feedback is designed on and pid its
     gains where they were designed already (else None; `zeros` are L1
     L2's); ff_model whether
     the feedforward inverts the sandwich's mbar L1 L2 (else the
     baseline); note why; baseline the linear baseline where the design
-    uses it (else None).
+    uses it (else None). `limit`: `design_pid`'s, a callable of the
+    plant's (num, den), or None.
 
     The baseline (`lin_model`, a result's linear fit) carries the play's
     effect on the loop, so by default the feedback is designed on it;
@@ -561,8 +611,9 @@ def linear_part(model, result, lin_model, feedback_from, feedforward_from,
     pid, fb_why = None, ''
     if feedback_from != 'model':
         try:
-            pid = design_pid(*check_plant('the baseline', lin_model),
-                             lin_model.dt, mm)
+            num, den = check_plant('the baseline', lin_model)
+            pid = design_pid(num, den, lin_model.dt, mm,
+                             limit(num, den) if callable(limit) else limit)
         except ValueError as exc:
             if 'baseline' in (feedback_from, feedforward_from):
                 raise ValueError(f"the result's linear baseline, asked for "
@@ -592,21 +643,25 @@ UNIT_CANCEL = 1e-4
 
 def cancel_unit_pair(sys):
     """`sys` with a pole at z = 1 removed together with the zero next to
-    it (within `UNIT_CANCEL`), when no other pole is that close to 1; its
-    high-frequency gain is kept. Returns
-    (sys, the zero cancelled or None)."""
+    it (within `UNIT_CANCEL`), when no other pole is that close to 1; or,
+    beside a pole at z = 1 (an integrator), a second pole that close with
+    that zero: a drift term (the linear fit pins a free pole at its
+    stability boundary on the play's drift, with a zero beside it); its
+    high-frequency gain is kept.
+    Returns (sys, the zero cancelled or None)."""
     num, den = tf_arrays(sys)
     if num.size < 2 or den.size < 2:
         return sys, None
     poles, zeros = np.roots(den), np.roots(num)
     at_one = np.flatnonzero(np.abs(poles - 1) < 1e-6)
     near = np.flatnonzero(np.abs(zeros - 1) < UNIT_CANCEL)
-    if not (at_one.size == 1 and near.size and np.sum(
-            np.abs(poles - 1) < UNIT_CANCEL) == 1):
-        return sys, None      # none, or more poles there than one pair
+    close = np.flatnonzero(np.abs(poles - 1) < UNIT_CANCEL)
+    if not (near.size and at_one.size and close.size in (1, 2)):
+        return sys, None      # none, or more poles near 1 than a pair
     i = near[np.argmin(np.abs(zeros[near] - 1))]
+    gone = close[np.argmax(np.abs(poles[close] - 1))]
     num = np.real(num[0] * np.poly(np.delete(zeros, i)))
-    den = np.real(den[0] * np.poly(np.delete(poles, at_one)))
+    den = np.real(den[0] * np.poly(np.delete(poles, gone)))
     return ct.tf(num, den, sys.dt, name=sys.name), float(np.real(zeros[i]))
 
 
@@ -628,11 +683,58 @@ def cancel_drift(model, notes):
         return out
 
     if isinstance(model, SandwichSystem):
-        L1, L2 = (cancel(getattr(model, tag), f"{tag}'s pole", "its zero")
+        L1, L2 = (cancel(getattr(model, tag), f"a pole of {tag}",
+                         "its zero")
                   for tag in ('L1', 'L2'))
         if L1 is model.L1 and L2 is model.L2:
             return model
         return SandwichSystem(L1, model.backlash, L2, name=model.name)
     if isinstance(model, ct.TransferFunction) and model.issiso():
-        return cancel(model, "the pole", "the zero")
+        return cancel(model, "a pole", "the zero")
     return model
+
+
+def static_inverse(num, den):
+    """The inverse of a block's DC gain, or of its integrator's gain g
+    (u = (z - 1)/(g z) x) when it integrates, after the block's delay:
+    numerator, denominator and delay (descending powers of z).
+
+    The band offset takes this way through L1, and the reference this way
+    through L2 to the inverse: a full inverse of an identified block
+    would turn the offset's jump into whatever the block's fitted fast
+    dynamics invert to, and its slow modes would make the backlash
+    output wanted wiggle in a hold, each wiggle a jump across the band."""
+    q = den.size - num.size
+    n, d, integrating = low_frequency_gain(num, den)
+    if integrating:
+        # (z - 1) / (g z) when the block has no delay: still proper
+        q = max(q, 1)
+        return np.array([1.0, -1.0]) / (n / d), np.r_[1.0, np.zeros(q)], q
+    return np.array([d / n]), np.r_[1.0, np.zeros(q)], q
+
+
+def jump_samples(L1_num, L1_den, band_x, dt, cap=2.0, longest=50):
+    """Samples to spread a band jump over: the fewest for which L1's
+    inverse turns a ramp across the band into at most `cap` times the
+    input that holds the far side (for an integrating L1: that moves x
+    across the band within L1's own response time)."""
+    inv_num, inv_den, _, _ = preview_inverse(L1_num, L1_den)
+    poles = np.roots(L1_den) if L1_den.size > 1 else np.zeros(0)
+    integ = np.any(np.abs(poles - 1) < 1e-6)
+    t = np.arange(4 * longest)
+    for n in range(1, longest + 1):
+        ramp = band_x * np.minimum(t / n, 1.0)
+        u = ct.forced_response(ct.tf(inv_num, inv_den, dt), T=t * dt,
+                               U=ramp).outputs
+        peak = np.max(np.abs(u))
+        if integ:
+            # x crosses the band in n samples: at most cap times the input
+            # whose integral does it in L1's settling time
+            rest = poles[np.abs(poles - 1) >= 1e-6]
+            slow = max([1.0] + [1 / max(1e-9, 1 - abs(p)) for p in rest])
+            hold = np.sum(np.abs(u)) / slow
+        else:
+            hold = abs(u[-1])
+        if peak <= cap * hold:
+            return n
+    return longest

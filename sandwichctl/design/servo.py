@@ -138,6 +138,12 @@ def _check_plant_tf(name, sys):
             f"{sd._fmt_roots(poles)}. Re-identify with integrators=1 (a "
             f"speed-in, position-out axis) or integrators=0, or with "
             f"fewer poles")
+    if np.any(np.abs(poles[at_one] - 1.0) > 1e-12):
+        # the integrator exactly at 1: at 1 - 1e-8 the grid would reach
+        # down to 1e-9 rad/sample, where the plant's gain is 10 times
+        # below its integrator's, and the bandwidth would come out 8 times
+        # too high (random drive 18 of benchmarks/bench_servo.py)
+        den = den[0] * np.real(np.poly(np.where(at_one, 1.0, poles)))
     return num, den
 
 
@@ -179,6 +185,9 @@ class ServoController(ct.NonlinearIOSystem):
     design_plant : control.TransferFunction
         The linear plant the feedback is designed and checked for (the
         model, or :math:`\bar m L_1 L_2` for a sandwich).
+    crossover_limit : float
+        The loop gain is below 1 above this many plant bandwidths (see
+        `servo_controller`).
     margins : dict
         'modulus' (:math:`\min |1 + CP|` on a log grid below the slowest pole),
         'gain', 'phase' (deg) and 'pole_radius' of the designed loop.
@@ -330,55 +339,10 @@ def _rebuild(design, name, state, operating_point):
     return ctrl
 
 
-def _static_inverse(num, den):
-    """The inverse of a block's DC gain, or of its integrator's gain g
-    (u = (z - 1)/(g z) x) when it integrates, after the block's delay:
-    numerator, denominator and delay (descending powers of z).
-
-    The band offset takes this way through L1, and the reference this way
-    through L2 to the inverse: a full inverse of an identified block
-    would turn the offset's jump into whatever the block's fitted fast
-    dynamics invert to, and its slow modes would make the backlash
-    output wanted wiggle in a hold, each wiggle a jump across the band."""
-    q = den.size - num.size
-    n, d, integrating = sd.low_frequency_gain(num, den)
-    if integrating:
-        # (z - 1) / (g z) when the block has no delay: still proper
-        q = max(q, 1)
-        return np.array([1.0, -1.0]) / (n / d), np.r_[1.0, np.zeros(q)], q
-    return np.array([d / n]), np.r_[1.0, np.zeros(q)], q
-
-
-def _jump_samples(L1_num, L1_den, band_x, dt, cap=2.0, longest=50):
-    """Samples to spread a band jump over: the fewest for which L1's
-    inverse turns a ramp across the band into at most `cap` times the
-    input that holds the far side (for an integrating L1: that moves x
-    across the band within L1's own response time)."""
-    inv_num, inv_den, _, _ = sd.preview_inverse(L1_num, L1_den)
-    poles = np.roots(L1_den) if L1_den.size > 1 else np.zeros(0)
-    integ = np.any(np.abs(poles - 1) < 1e-6)
-    t = np.arange(4 * longest)
-    for n in range(1, longest + 1):
-        ramp = band_x * np.minimum(t / n, 1.0)
-        u = ct.forced_response(ct.tf(inv_num, inv_den, dt), T=t * dt,
-                               U=ramp).outputs
-        peak = np.max(np.abs(u))
-        if integ:
-            # x crosses the band in n samples: at most cap times the input
-            # whose integral does it in L1's settling time
-            rest = poles[np.abs(poles - 1) >= 1e-6]
-            slow = max([1.0] + [1 / max(1e-9, 1 - abs(p)) for p in rest])
-            hold = np.sum(np.abs(u)) / slow
-        else:
-            hold = abs(u[-1])
-        if peak <= cap * hold:
-            return n
-    return longest
-
-
 def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                      max_preview=20, band_fraction=None, smoothing=None,
                      jump_samples=None, feedback_scale=1.0,
+                     crossover_limit=None,
                      feedforward_from='auto', feedback_from='auto',
                      adapt=None,
                      operating_point=(0.0, 0.0), name=None):
@@ -472,6 +436,14 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     feedback_scale : float, optional
         Factor on the designed PID gains (default 1), for detuning or
         sweeps; the scaled loop is checked like the designed one.
+    crossover_limit : float, optional
+        The loop gain must be below 1 above this many plant bandwidths
+        (the plant's -3 dB frequency), in [0.1, 1000]. By default 3 for
+        a PID and 1 for the PD of an integrating plant; for a PID
+        designed from an identification result, up to 8 where the
+        residuals of its data put the model's relative error below 0.5
+        in every band up to there (`error_bands` of
+        ``sandwichctl.tools.residuals``; much play keeps it at 3).
     operating_point : (float, float), optional
         (u0, y0): raw units of u and y at the model's zero.
     name : str, optional
@@ -512,6 +484,16 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                         ('feedback_from', feedback_from)):
         check_option(key, choice, ('auto', 'model', 'baseline'))
     check_option('adapt', adapt, (None, True, False))
+    if crossover_limit is not None:
+        crossover_limit = check_finite('crossover_limit', crossover_limit)
+        if not 0.1 <= crossover_limit <= 1000:
+            raise ValueError(f"crossover_limit must be in [0.1, 1000] "
+                             f"plant bandwidths; got {crossover_limit!r}")
+    bands = sd.result_bands(result)
+
+    def limit(num, den):
+        return (sd.crossover_limit(bands, num, den) if crossover_limit is
+                None else (crossover_limit, 'as asked'))
     max_preview = check_int('max_preview', max_preview, minimum=0,
                             maximum=MAX_ORDER)
     name = check_name('name', name)
@@ -534,15 +516,17 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         ff_zeros = np.concatenate([model.L1.zeros(), model.L2.zeros()])
         P, pid, ff_model, linear_note, lin_model = sd.linear_part(
             model, result, lin_model, feedback_from, feedforward_from,
-            integrating, ff_zeros, max_preview, mm, _check_plant_tf)
+            integrating, ff_zeros, max_preview, mm, _check_plant_tf,
+            lambda n, d: limit(n, d)[0])
     else:
         P, linear_note, pid = model, None, None
     num, den = _check_plant_tf('model' if P is model else 'the design plant',
                                P)
     dt = P.dt
     # the baseline's gains were designed when it was checked
+    lim, lim_why = limit(num, den)
     kp, ki, kd, pole = pid if pid is not None else sd.design_pid(
-        num, den, dt, mm)
+        num, den, dt, mm, lim)
     scale = check_positive('feedback_scale', feedback_scale)
     kp, ki, kd = scale * kp, scale * ki, scale * kd
     C = sd.pid_tf(kp, ki, kd, pole, dt)
@@ -558,12 +542,13 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                  f"{'proportional' if ki == 0 else 'integral'} gain at "
                  f"modulus margin {mm:g}{'' if ki == 0 else ' and |T| <= 1'}"
                  f" (got {mmod:.3f} on a log grid from "
-                 f"{sd.frequency_grid(den)[0]:.1e} rad/sample)")
+                 f"{sd.frequency_grid(den)[0]:.1e} rad/sample), crossover "
+                 f"below {lim:.3g} plant bandwidths: {lim_why}")
     design = dict(model=model, dt=dt, kp=float(kp), ki=float(ki),
                   kd=float(kd), derivative_pole=float(pole),
                   pid=ct.tf(C.num[0][0], C.den[0][0], dt,
                                  inputs='e', outputs='u_fb'),
-                  design_plant=P,
+                  design_plant=P, crossover_limit=float(lim),
                   margins=dict(modulus=mmod, gain=gm, phase=pm,
                                pole_radius=radius),
                   operating_point=(u0, y0), feedforward_kind=feedforward,
@@ -597,7 +582,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     if comp:
         # a model without data (known, or built by hand) is inverted
         # exactly along the reference; an identified one gets the band
-        # offset through the DC gains (see _static_inverse)
+        # offset through the DC gains (see sd.static_inverse)
         exact = result is None
         L2n, L2d = sd.tf_arrays(model.L2)
         if exact:
@@ -607,14 +592,14 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                                                max_preview)
             preview, fn, fd = 0, np.zeros(1), np.ones(1)
         else:
-            n2, d2, p2 = _static_inverse(L2n, L2d)
+            n2, d2, p2 = sd.static_inverse(L2n, L2d)
             if np.any(np.abs(model.L1.zeros()) >= 1):
                 # a non-minimum-phase L1 first moves the wrong way: its DC
                 # gain alone would send the offset astray
                 n1, d1, p1, _ = sd.preview_inverse(L1n, L1d, feedforward,
                                                    max_preview)
             else:
-                n1, d1, p1 = _static_inverse(L1n, L1d)
+                n1, d1, p1 = sd.static_inverse(L1n, L1d)
         default = (BAND_FRACTION_INTEGRATING if integrating else
                    BAND_FRACTION_MODEL if ff_model else BAND_FRACTION)
         band_fraction_out = (
@@ -627,7 +612,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         smoothing_out = (SMOOTHING * mbar * band_x if smoothing is None
                          else check_nonnegative('smoothing', smoothing))
         if jump_samples is None:
-            jump = _jump_samples(L1n, L1d, band_x, dt)
+            jump = sd.jump_samples(L1n, L1d, band_x, dt)
             if integrating:
                 # L1^-1 turns the jump into a speed pulse: no faster than
                 # the loop follows, or a load that coasts overshoots

@@ -36,6 +36,7 @@ from ._starts import (splits, opened, random_start, recursive_start,
                       held_starts, holds)
 from .linear import oe_transfer_function
 from .._checks import progress_bar
+from ..tools.residuals import error_bands
 
 __all__ = []
 
@@ -371,7 +372,8 @@ class Search:
         return {'fit': float(100 * (1 - np.linalg.norm(r_lin) / denom)),
                 'cost': 0.5 * float(r_lin @ r_lin),
                 'model': oe_transfer_function(lin['B'] * prob.sy / prob.su,
-                                              lin['F'], nk_l, self.task.dt)}
+                                              lin['F'], nk_l, self.task.dt),
+                'error_bands': error_bands(r_lin, y_all - r_lin)}
 
     def extend(self, s, phi):
         """A model start of sign s with the linear fit's output offsets
