@@ -203,10 +203,11 @@ CROSSOVER_LIMIT = {'pid': 3.0, 'pd': 1.0}
 #: CROSSOVER_LIMIT['pid'], up to CROSSOVER_MOST plant bandwidths, as far
 #: as the residuals of its data put the model's relative error below
 #: TRUSTED in every band from the lowest up (`tools.residuals.error_bands`).
-#: The residuals of a drive with much play are large from the bandwidth
-#: up (its limit stays 3: a larger one hunted when the load coasted, see
-#: above); those of a play-free one are not, and there the modulus margin
-#: bound the loop long before the crossover limit did
+#: The residuals of a drive with much play reach it within a few
+#: bandwidths (its limit stays 3: a larger one hunted when the load
+#: coasted, see above); those of a play-free one only beyond 10, and there
+#: the limit of 3, not the modulus margin, bound the loop. Robust
+#: stability asks |T| delta < 1: with |T| <= 1, TRUSTED leaves a factor 2
 TRUSTED = 0.5
 CROSSOVER_MOST = 8.0
 

@@ -45,17 +45,25 @@ def _filt(b, a, x):
     return np.concatenate([lfilter(b, a, part) for part in _segs(x)])
 
 
-def _delays(x, first, count):
+def _delays(x, first, count, out=None, negate=False):
     """Matrix whose column j is x delayed by first + j samples (zero ICs),
-    experiment by experiment."""
-    if isinstance(x, (list, tuple)):
-        return np.vstack([_delays(part, first, count) for part in x])
-    n = x.size
-    out = np.zeros((n, count))
-    for j in range(count):
-        d = first + j
-        if d < n:
-            out[d:, j] = x[:n - d]
+    experiment by experiment (negated with `negate`); written into `out`
+    (one row per sample, `count` columns) when given."""
+    parts = _segs(x)
+    if out is None:
+        out = np.empty((sum(part.size for part in parts), count))
+    at = 0
+    for part in parts:
+        n = part.size
+        for j in range(count):
+            d = min(first + j, n)
+            col = out[at:at + n, j]
+            col[:d] = 0.0
+            if negate:
+                np.negative(part[:n - d], out=col[d:])
+            else:
+                col[d:] = part[:n - d]
+        at += n
     return out
 
 
@@ -161,18 +169,23 @@ def _jacobian(b, fp, v, yhat, nk):
     """d yhat / d [b, f'] by filtering through 1 / F'."""
     nb, m = b.size, fp.size - 1
     segs = _segs(v)
-    cols = [_delays(_split(_filt([1.0], fp, segs), segs), nk, nb)]
+    # one matrix, filled column by column (each column contiguous): on a
+    # million samples, stacking copies cost more than the filtering
+    jac = np.empty((sum(part.size for part in segs), nb + m), order='F')
+    _delays(_split(_filt([1.0], fp, segs), segs), nk, nb, out=jac[:, :nb])
     if m:
-        cols.append(-_delays(_split(_filt([1.0], fp, _split(yhat, segs)),
-                                    segs), 1, m))
-    return np.hstack(cols)
+        _delays(_split(_filt([1.0], fp, _split(yhat, segs)), segs), 1, m,
+                out=jac[:, nb:], negate=True)
+    return jac
 
 
 def _normal(jac, r):
-    """Column-scaled normal equations: J'J / dd', J'r / d and d = |J_:j|."""
-    d = np.linalg.norm(jac, axis=0)
+    """Column-scaled normal equations: J'J / dd', J'r / d and d = |J_:j|
+    (from the diagonal of J'J)."""
+    a = jac.T @ jac
+    d = np.sqrt(np.maximum(np.diag(a), 0.0))
     d = np.maximum(d, 1e-12 * max(d.max(), 1e-300))
-    return (jac.T @ jac) / np.outer(d, d), (jac.T @ r) / d, d
+    return a / np.outer(d, d), (jac.T @ r) / d, d
 
 
 def _start(v, y, nb, m, nk, offsets=False):
