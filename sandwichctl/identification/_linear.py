@@ -125,11 +125,17 @@ def _lstsq(phi, y):
 def _centred(x, segs, offsets):
     """x (samples stacked over the experiments `segs`, rows for a matrix)
     with each experiment's mean removed, if `offsets`: least squares on
-    centred columns is least squares with a constant per experiment."""
+    centred columns is least squares with a constant per experiment. In
+    place: every caller passes an array it has just made (on a million
+    samples a copy of the Jacobian cost as much as filtering it)."""
     if not offsets:
         return x
-    return np.concatenate([part - part.mean(axis=0)
-                           for part in _split(x, segs)])
+    at = 0
+    for part in segs:
+        rows = x[at:at + part.size]
+        rows -= rows.mean(axis=0)
+        at += part.size
+    return x
 
 
 def _arx(v, y, nb, m, nk, offsets=False):
