@@ -141,6 +141,12 @@ def check_finite(name, value):
     return value
 
 
+#: scalar types a per-sample call (a controller's or a drive's step) takes
+#: with a bare float(), skipping `check_real`: float() gives what
+#: check_real would for each of them
+PLAIN_REALS = frozenset((float, int, np.float64, np.float32, np.int64))
+
+
 def check_real(name, value):
     """Return `value` as float, requiring a real number (NaN and inf pass:
     the caller says what they mean for it)."""

@@ -69,7 +69,7 @@ from dataclasses import dataclass, field
 import numba
 import numpy as np
 
-from .._checks import (check_bool, check_int, check_positive,
+from .._checks import (PLAIN_REALS, check_bool, check_int, check_positive,
                        check_nonnegative, check_option, check_real,
                        check_signal)
 
@@ -437,7 +437,7 @@ class ServoDrive:
             raise RuntimeError(f"the drive was set up for n = "
                                f"{su.disturbance.size} samples; make it "
                                f"with a larger n")
-        u = float(u) if type(u) in (float, int) else check_real('u', u)
+        u = float(u) if type(u) in PLAIN_REALS else check_real('u', u)
         if not np.isfinite(u):
             raise ValueError(f"u must be finite; got {u}")
         torque = _drive_step(self._state, u, su.position_loop, su.prm,

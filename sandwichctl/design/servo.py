@@ -67,9 +67,10 @@ from ._servo_kernel import (pack, servo_step, servo_run, adapt_index,
                             NSCALAR)
 from .loop import servo_loop, ss_arrays
 from ..model.sandwich import SandwichSystem
-from .._checks import (DATA_RANGE, MAX_ORDER, check_finite, check_int,
-                       check_name, check_nonnegative, check_option,
-                       check_positive, check_real, check_signal)
+from .._checks import (DATA_RANGE, MAX_ORDER, PLAIN_REALS, check_finite,
+                       check_int, check_name, check_nonnegative,
+                       check_option, check_positive, check_real,
+                       check_signal)
 
 
 __all__ = ['ServoController', 'servo_controller']
@@ -147,8 +148,6 @@ def _check_plant_tf(name, sys):
     return num, den
 
 
-#: types `ServoController.step` takes without a check
-_PLAIN = frozenset((float, int, np.float64, np.float32, np.int64))
 
 
 class ServoController(ct.NonlinearIOSystem):
@@ -246,9 +245,9 @@ class ServoController(ct.NonlinearIOSystem):
         before the memory is touched, so one bad reading does not poison
         every later sample."""
         # a float or an int goes straight on (about 1 us a step)
-        r = (float(r_ahead) if type(r_ahead) in _PLAIN else
+        r = (float(r_ahead) if type(r_ahead) in PLAIN_REALS else
              check_real('r_ahead', r_ahead))
-        yk = float(y) if type(y) in _PLAIN else check_real('y', y)
+        yk = float(y) if type(y) in PLAIN_REALS else check_real('y', y)
         if not (math.isfinite(r) and math.isfinite(yk)):
             raise ValueError(f"r_ahead and y must be finite; got "
                              f"r_ahead={r!r}, y={yk!r} (the controller's "

@@ -143,8 +143,8 @@ def _arx(v, y, nb, m, nk, offsets=False):
     experiment with `offsets`) + e; returns b, F'."""
     segs = _segs(y)
     theta = _lstsq(
-        _centred(np.hstack([_delays(v, nk, nb), -_delays(y, 1, m)]), segs,
-                 offsets),
+        _centred(np.hstack([_delays(v, nk, nb),
+                            _delays(y, 1, m, negate=True)]), segs, offsets),
         _centred(np.concatenate(segs), segs, offsets))
     return theta[:nb], np.concatenate([[1.0], theta[nb:]])
 
