@@ -14,10 +14,18 @@ private switch ``_long.LONG_RECORD``):
     parameter error against the true plant;
 (b) seeded random plants of ``sw.data.random_case`` (SNR 100) at
     N = 1e5, with the threshold lowered so that the long-record path
-    runs there too, and optionally (``--n-random``) at other lengths.
+    runs there too, and optionally (``--n-random``) at other lengths;
+(c) with ``--baseline-seeds``, the linear baseline of the whole record
+    (stage 2 of the long-record path) on random plants at N = 1e6: the
+    output-error fit from the ARX start on all the samples (what the
+    path did before) against the one from the fit of the leading
+    `_long.LONG_HEAD` samples (what it does now): iterations, time and
+    cost. ``--arx-repeat`` adds rows of the long-record path with that
+    baseline from the ARX start, to compare in one run.
 
 Run: python benchmarks/bench_long_records.py [--seeds 3] [--repeat 3]
      [--old-repeat 1] [--random-seeds 0 1] [--n-random 100000]
+     [--baseline-seeds 0 1 2 3 4 5 6 7] [--arx-repeat 3]
 (``--old-repeat 0``: the long-record path alone.)
 """
 
@@ -25,6 +33,7 @@ import argparse
 import contextlib
 import os
 import sys
+import time
 import warnings
 
 import numpy as np
@@ -67,15 +76,19 @@ class Counter:
 
 
 @contextlib.contextmanager
-def path(long, threshold=None):
+def path(long, threshold=None, arx=False):
     """The long-record path (at `threshold`, default the library's) or
-    the exhaustive search (``long=False``)."""
-    saved = _long.LONG_RECORD
+    the exhaustive search (``long=False``); with `arx`, the long-record
+    path's baseline of all the samples from the ARX start (as before it
+    started from the leading samples' fit)."""
+    saved, carried = _long.LONG_RECORD, _long._carried_linear
     _long.LONG_RECORD = (threshold or saved) if long else np.inf
+    if arx:
+        _long._carried_linear = lambda *args: None
     try:
         yield
     finally:
-        _long.LONG_RECORD = saved
+        _long.LONG_RECORD, _long._carried_linear = saved, carried
 
 
 def identify(u, y, orders):
@@ -102,12 +115,14 @@ def measure(u, y, plant, repeat, **kw):
 def rows_of(label, u, y, plant, args, threshold=None):
     """Two table rows, new and old path, of one record."""
     out = []
-    for name, long, repeat in (('long-record', True, args.repeat),
-                               ('exhaustive', False, args.old_repeat)):
+    for name, long, arx, repeat in (
+            ('long-record', True, False, args.repeat),
+            ('long, ARX baseline', True, True, args.arx_repeat),
+            ('exhaustive', False, False, args.old_repeat)):
         if not repeat:
             continue
         t, full, lengths, res, err = measure(
-            u, y, plant, repeat, long=long, threshold=threshold)
+            u, y, plant, repeat, long=long, threshold=threshold, arx=arx)
         taken = res.long_record is not None
         out.append([label, f'{u.size:,}', name, 'yes' if taken else 'no',
                     repeat, f'{t:.2f} s', full, f'{lengths:.1f}',
@@ -150,6 +165,40 @@ def random_plants(args):
     print_table(HEADERS, rows)
 
 
+def baseline_starts(seeds, n=1_000_000):
+    """Table (c): the whole record's linear baseline from either start."""
+    from sandwichctl.identification._linear import fit_oe
+    from sandwichctl.identification._search import step1_units, Task
+    from sandwichctl.identification._options import OEOptions
+    rows, head = [], _long.LONG_HEAD
+    for seed in seeds:
+        case = sw.data.random_case(seed, n=n, snr=100)
+        o = case.plant.orders
+        task = Task([case.u], [case.y], o, OEOptions())
+        scaled = step1_units(task)
+        u, y = scaled.u[0], scaled.y[0]
+        kw = dict(max_iter=task.opt.max_iter, tol=task.opt.tol)
+        t = time.perf_counter()
+        fa = fit_oe(u, y, task.shape, 0, **kw)
+        ta = time.perf_counter() - t
+        short = fit_oe(u[:head], y[:head], task.shape, 0, **kw)
+        t = time.perf_counter()
+        fh = fit_oe(u, y, task.shape, 0, start=(short['B'], short['Ff']),
+                    **kw)
+        th = time.perf_counter() - t
+        rows.append([f'random_case({seed})', f'{n:,}', fa['nit'],
+                     f'{ta:.2f} s', f'{fa["cost"]:.8g}', short['nit'],
+                     fh['nit'], f'{th:.2f} s', f'{fh["cost"]:.8g}',
+                     f'{(fh["cost"] - fa["cost"]) / fa["cost"]:+.1e}'])
+    print(f"\n(c) the linear baseline of the whole record (no integrator, "
+          f"scaled data): Levenberg-Marquardt from the ARX start against "
+          f"from the fit of the leading {head:,} samples (its own "
+          f"iterations on those apart)\n")
+    print_table(['case', 'N', 'ARX start: iterations', 'time', 'cost',
+                 'head fit: iterations on the head', 'then on all', 'time',
+                 'cost', 'cost change'], rows)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     ap.add_argument('--seeds', type=int, default=3)
@@ -157,6 +206,10 @@ def main():
     ap.add_argument('--old-repeat', type=int, default=1)
     ap.add_argument('--random-seeds', type=int, nargs='*', default=[0, 1])
     ap.add_argument('--n-random', type=int, default=100_000)
+    ap.add_argument('--baseline-seeds', type=int, nargs='*', default=[])
+    ap.add_argument('--arx-repeat', type=int, default=0,
+                    help="also run the long-record path with the baseline "
+                    "of all the samples from the ARX start (before)")
     args = ap.parse_args()
     print(f"Long records; {os.cpu_count()} cores, load average "
           f"{os.getloadavg()[0]:.2f} at the start; medians of repeated runs "
@@ -166,6 +219,8 @@ def main():
         paper(args)
     if args.random_seeds:
         random_plants(args)
+    if args.baseline_seeds:
+        baseline_starts(args.baseline_seeds)
 
 
 if __name__ == '__main__':

@@ -62,6 +62,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 import sandwichctl as sw                                   # noqa: E402
 from _timing import print_table                            # noqa: E402
 from sandwichctl.design import _servo_design as sd         # noqa: E402
+from sandwichctl.design import _servo_data as sdata        # noqa: E402
 
 ORDERS = dict(na=2, nb=1, nc=2, nd=1, q1=1, q2=0)
 LINEAR = dict(nb=3, nf=4, nk=1)
@@ -189,7 +190,7 @@ def main():
     if args.crossover is not None:
         sd.CROSSOVER_LIMIT['pid'] = args.crossover
     if args.fixed_crossover:
-        sd.CROSSOVER_MOST = sd.CROSSOVER_LIMIT['pid']
+        sdata.CROSSOVER_MOST = sd.CROSSOVER_LIMIT['pid']
     rows, checks, bands, margin, sources, swept = [], [], [], [], [], []
     mism = []
     start = time.perf_counter()

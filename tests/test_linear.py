@@ -61,6 +61,22 @@ def test_lm_recovers_from_a_perturbed_start(rng):
     np.testing.assert_allclose(out['F'], F, atol=1e-3)
 
 
+def test_a_start_at_the_optimum_is_kept_and_an_unstable_one_is_not(rng):
+    B, F = np.array([1.0, -0.5]), np.real(np.poly([0.9, 0.6 + 0.3j,
+                                                   0.6 - 0.3j]))
+    u, y, _ = _oe_data(rng, B, F, 1, 3000)
+    y = y + 1e-2 * rng.standard_normal(u.size)
+    arx = fit_oe(u, y, (2, 3, 1), 0)
+    warm = fit_oe(u, y, (2, 3, 1), 0, start=(arx['B'], arx['Ff']))
+    assert warm['converged'] and warm['nit'] <= 1 < arx['nit']
+    assert warm['cost'] <= arx['cost'] * (1 + 1e-9)
+    # unstable, ill-sized or not finite: the ARX start, the same fit
+    for bad in ((arx['B'], np.poly([1.2, 0.5, 0.1])), (arx['B'][:1],
+                arx['Ff']), (arx['B'] * np.nan, arx['Ff'])):
+        out = fit_oe(u, y, (2, 3, 1), 0, start=bad)
+        assert out['nit'] == arx['nit'] and out['cost'] == arx['cost']
+
+
 def test_python_control_convention():
     """nb=1, nf=2, nk=1, B=1.5, F=[1, .1, .2] is ct.tf([1.5, 0], ...)."""
     plant = ct.tf([1.5, 0], [1, 0.1, 0.2], 1)

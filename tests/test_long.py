@@ -75,8 +75,22 @@ def test_long_path_fits_as_the_exhaustive_search(both, record):
     err = sw.parameter_error(res.theta, plant.theta)
     assert err <= 1.2 * sw.parameter_error(exh.theta, plant.theta) + 1e-4
     assert res.fit >= res.linear['fit']
-    # the baseline is the linear fit of all the samples, as without it
+    # the baseline is the linear fit of all the samples, from the leading
+    # samples' fit: the same optimum as from the ARX start here
     assert res.linear['fit'] == pytest.approx(exh.linear['fit'], abs=1e-6)
+
+
+def test_the_leading_samples_linear_fit_starts_that_of_all():
+    from types import SimpleNamespace
+    F = np.polymul([1.0, -1.0], [1.0, -0.5, 0.06])
+    head = {'integrators': 1, 'B': np.array([0.4, 0.2]), 'F': F}
+    scaled = SimpleNamespace(su=2.0, sy=4.0)
+    b, free = _long._carried_linear(head, scaled, 1)
+    np.testing.assert_allclose(b, [0.2, 0.1])
+    np.testing.assert_allclose(free, [1.0, -0.5, 0.06], atol=1e-12)
+    # another integrator count (or none stored): the ARX start
+    assert _long._carried_linear(head, scaled, 0) is None
+    assert _long._carried_linear({'integrators': 1}, scaled, 1) is None
 
 
 def test_long_path_with_experiments_offsets_and_initial_states(

@@ -185,3 +185,28 @@ def test_identify_keeps_the_error_bands_of_its_baseline():
                       dt=case.dt)
     w, delta = res.linear['error_bands']
     assert w.size == delta.size > 10 and np.all(np.isfinite(delta))
+    wr, rel, sigma = res.linear['relative_error']
+    np.testing.assert_array_equal(wr, w)
+    assert np.all(np.isfinite(rel)) and np.all(sigma >= 0)
+    # what Delta leaves of the residual's power is what sigma counts
+    assert np.all(np.abs(rel) <= delta * (1 + 1e-9))
+
+
+def test_relative_error_measures_gain_and_phase_of_a_missing_lag(rng):
+    from sandwichctl.tools.residuals import relative_error
+    # a first-order fit of a plant with a second, unmodelled lag
+    P = ct.tf([0.05], [1, -0.95], 1) * ct.tf([0.5], [1, -0.5], 1)
+    n = 4000
+    u = np.repeat(rng.standard_normal(n // 20), 20) + 0.3 * rng.standard_normal(n)
+    y = ct.forced_response(P, U=u).outputs + 1e-3 * rng.standard_normal(n)
+    lin = sw.identify_linear(u, y, nb=1, nf=1, nk=1, dt=1)
+    w, rel, sigma = relative_error(lin.residuals, lin.yhat)
+    z = np.exp(1j * w)
+    true = (np.polyval(P.num[0][0], z) / np.polyval(P.den[0][0], z)
+            / (np.polyval(lin.model.num[0][0], z)
+               / np.polyval(lin.model.den[0][0], z))) - 1
+    sure = sigma < 0.05
+    assert sure.sum() > 10 and np.max(np.abs(true[sure])) > 0.5
+    # band averages of a relative error that turns by 90 deg per decade
+    assert np.all(np.abs(rel - true)[sure] < 0.05 + 0.1 * np.abs(true[sure]))
+    assert relative_error(np.ones(10), np.ones(10))[1].size == 0

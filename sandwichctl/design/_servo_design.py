@@ -48,7 +48,6 @@ import control as ct
 from ..model.sandwich import SandwichSystem
 from .inverse import _fmt_roots
 from .references import servo_reference
-from ..tools.residuals import error_bands
 
 #: a zero this close to the unit circle or outside counts as unstable
 ZERO_RADIUS = 1.0
@@ -183,54 +182,20 @@ def bandwidth(num, den, w):
     return float(w[below[0]]) if below.size else float(w[-1])
 
 
-#: the loop gain must be below 1 above this multiple of the plant's
-#: bandwidth (its -3 dB frequency, an integrator set aside): for a PID,
-#: whose complementary sensitivity is also held at |T| <= 1 (`_no_peak`),
-#: and for the PD of an integrating plant (which has no such bound: it
-#: cost the speed loops of benchmarks/bench_servo.py their margins, and a
-#: larger limit made a 12 um speed drive hunt). The PID's was 2: that,
-#: not the modulus margin (0.75 to 0.9 on the model), bounded the position
-#: drives of bench_servo.py, which then tracked 2 to 3 times worse than the
-#: best of a sweep of their gains. At 3 its position drives track better
-#: (all but the linear design of one drive with 200 um, 12.1 -> 13.3 um)
-#: and none hunts more; 4 tracked better still on the
-#: drives identified, but hunted on drives with 200 um whose load was
-#: twice as heavy or whose inner loop 1.25 times stiffer than the record's
+#: the loop gain must be below 1 above this multiple of the plant's bandwidth
+#: (its -3 dB frequency, an integrator set aside): for a PID, whose
+#: complementary sensitivity is also held at |T| <= 1 (`_no_peak`), and for the
+#: PD of an integrating plant (which has no such bound: it cost the speed loops
+#: of benchmarks/bench_servo.py their margins, and a larger limit made a 12 um
+#: speed drive hunt). The PID's was 2: that, not the modulus margin (0.75 to
+#: 0.9 on the model), bounded the position drives of bench_servo.py, which then
+#: tracked 2 to 3 times worse than the best of a sweep of their gains. At 3 its
+#: position drives track better (all but the linear design of one drive with
+#: 200 um, 12.1 -> 13.3 um) and none hunts more; 4 tracked better still on the
+#: drives identified, but hunted on drives with 200 um whose load was twice as
+#: heavy or whose inner loop 1.25 times stiffer than the record's
 #: (bench_servo.py --mismatch)
 CROSSOVER_LIMIT = {'pid': 3.0, 'pd': 1.0}
-
-#: a PID designed from an identification result may cross over above
-#: CROSSOVER_LIMIT['pid'], up to CROSSOVER_MOST plant bandwidths, as far
-#: as the residuals of its data put the model's relative error below
-#: TRUSTED in every band from the lowest up (`tools.residuals.error_bands`).
-#: The residuals of a drive with much play reach it within a few
-#: bandwidths (its limit stays 3: a larger one hunted when the load
-#: coasted, see above); those of a play-free one only beyond 10, and there
-#: the limit of 3, not the modulus margin, bound the loop. Robust
-#: stability asks |T| delta < 1: with |T| <= 1, TRUSTED leaves a factor 2
-TRUSTED = 0.5
-CROSSOVER_MOST = 8.0
-
-
-def crossover_limit(bands, num, den):
-    """(limit, why): the crossover limit of `design_pid` in plant
-    bandwidths for the plant num/den, given the error bands (w, delta) of
-    its data (`tools.residuals.error_bands`, None for a model without
-    data), and why in words."""
-    if np.any(np.abs(np.roots(den) - 1) < 1e-6):
-        return CROSSOVER_LIMIT['pd'], "the PD's of an integrating plant"
-    base = CROSSOVER_LIMIT['pid']
-    if bands is None or len(bands[0]) == 0:
-        return base, 'the default, for a model without data'
-    w, delta = (np.asarray(a, float) for a in bands)
-    wb = bandwidth(num, den, frequency_grid(den))
-    bad = np.nonzero(~(delta <= TRUSTED))[0]
-    trusted = w[-1] if bad.size == 0 else (w[bad[0] - 1] if bad[0] else 0.0)
-    limit = float(np.clip(trusted / wb, base, CROSSOVER_MOST))
-    return limit, (
-        f"the data's residuals put the model's relative error below "
-        f"{TRUSTED:g} up to {trusted / wb:.3g} plant bandwidths "
-        f"(limit {base:g} to {CROSSOVER_MOST:g})")
 
 #: a PD found on the coarse grid is refined on a grid this many times
 #: finer around it
@@ -258,19 +223,7 @@ def low_frequency_sign(num, den):
     return 1.0 if n / d >= 0 else -1.0
 
 
-def result_bands(result):
-    """The error bands (w, delta) of an identification result's linear
-    fit (`tools.residuals.error_bands`): of `identify_linear`'s from its
-    residuals, of `identify`'s as it stored them for its baseline; None
-    for no result or a result without them."""
-    e, yhat = (getattr(result, key, None) for key in ('residuals', 'yhat'))
-    if e is not None and yhat is not None:
-        return error_bands(e, yhat)
-    linear = getattr(result, 'linear', None)
-    return linear.get('error_bands') if isinstance(linear, dict) else None
-
-
-def design_pid(num, den, dt, modulus_margin, limit=None):
+def design_pid(num, den, dt, modulus_margin, limit=None, measured=None):
     """PID gains (kp, ki, kd, pole) for the plant num/den (descending
     powers of z, at most one pole at z = 1): the largest ki under the
     modulus margin and with :math:`|T| \\le 1` (no frequency of the
@@ -282,7 +235,11 @@ def design_pid(num, den, dt, modulus_margin, limit=None):
     gain is lowered (no conditional stability, which a saturating drive
     turns into a limit cycle). An integrating plant gets
     the PD with the largest kp instead: a type-2 loop around play has no
-    rest point and hunts."""
+    rest point and hunts. With `measured` (`_servo_data.data_plant`'s
+    (response, alone)), the margin, |T| and the crossover limit are read
+    on the response the data measured wherever it has data, on the model
+    elsewhere, and unless alone on the model too; the loop must be
+    stable on the model."""
     w = frequency_grid(den)
     z = np.exp(1j * w)
     # a plant with a negative low-frequency gain gets negative gains
@@ -293,20 +250,29 @@ def design_pid(num, den, dt, modulus_margin, limit=None):
     integrating = np.any(np.abs(np.roots(den) - 1) < 1e-6)
     if limit is None:
         limit = CROSSOVER_LIMIT['pd' if integrating else 'pid']
-    high = w > limit * wb
     # scale of the gains: 1/|P| at the plant's bandwidth and where its
     # phase first reaches -180 deg, whichever is smaller
     phase = np.unwrap(np.angle(P))
     cross = np.nonzero(phase <= phase[0] - np.pi)[0]
     k0 = min(1.0 / np.abs(P[cross[0] if cross.size else -1]),
              1.0 / np.abs(P[np.searchsorted(w, wb)]))
-    I = z / (z - 1)
+    # the frequencies (columns) the constraints are read at
+    wc, zc = w, z
+    if measured is not None:
+        G, alone = sign * measured[0](w), measured[1]
+        have = np.isfinite(G)
+        if alone:
+            P = np.where(have, G, P)
+        else:               # both: the measured frequencies appended
+            wc, zc, P = np.r_[w, w[have]], np.r_[z, z[have]], np.r_[P, G[have]]
+    high = wc > limit * wb
+    I = zc / (zc - 1)
 
     def grid(pole, kp, kd):
         """Candidates (kp, ki, kd, pole) on the grid kp x kd: the PIDs
         with their largest ki, and the PDs (ki = 0) that meet both
         constraints."""
-        D = (1 - pole) * (z - 1) / (z - pole)
+        D = (1 - pole) * (zc - 1) / (zc - pole)
         KP, KD = (g.ravel() for g in np.meshgrid(kp, kd))
         boost = KD * (1 - pole) * 2 / (1 + pole) <= DERIVATIVE_BOOST * KP
         KP, KD = KP[boost], KD[boost]
@@ -565,7 +531,7 @@ def tf_arrays(sys):
 
 def linear_part(model, result, lin_model, feedback_from, feedforward_from,
                 integrating, zeros, max_preview, mm, check_plant,
-                limit=None):
+                limit=None, measured=None):
     """The linear part of a sandwich's design: (P, pid, ff_model, note,
     baseline). P is the plant the feedback is designed on and pid its
     gains where they were designed already (else None; `zeros` are L1
@@ -573,7 +539,7 @@ def linear_part(model, result, lin_model, feedback_from, feedforward_from,
     the feedforward inverts the sandwich's mbar L1 L2 (else the
     baseline); note why; baseline the linear baseline where the design
     uses it (else None). `limit`: `design_pid`'s, a callable of the
-    plant's (num, den), or None.
+    plant's (num, den), or None; `measured` likewise.
 
     The baseline (`lin_model`, a result's linear fit) carries the play's
     effect on the loop, so by default the feedback is designed on it;
@@ -614,7 +580,9 @@ def linear_part(model, result, lin_model, feedback_from, feedforward_from,
         try:
             num, den = check_plant('the baseline', lin_model)
             pid = design_pid(num, den, lin_model.dt, mm,
-                             limit(num, den) if callable(limit) else limit)
+                             limit(num, den) if callable(limit) else limit,
+                             measured(num, den) if callable(measured)
+                             else measured)
         except ValueError as exc:
             if 'baseline' in (feedback_from, feedforward_from):
                 raise ValueError(f"the result's linear baseline, asked for "

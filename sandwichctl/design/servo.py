@@ -63,6 +63,7 @@ import numpy as np
 import control as ct
 
 from . import _servo_design as sd
+from . import _servo_data as sdata
 from ._servo_kernel import (pack, servo_step, servo_run, adapt_index,
                             NSCALAR)
 from .loop import servo_loop, ss_arrays
@@ -189,7 +190,11 @@ class ServoController(ct.NonlinearIOSystem):
         `servo_controller`).
     margins : dict
         'modulus' (:math:`\min |1 + CP|` on a log grid below the slowest pole),
-        'gain', 'phase' (deg) and 'pole_radius' of the designed loop.
+        'gain', 'phase' (deg) and 'pole_radius' of the designed loop on
+        the design plant; 'modulus_measured', the modulus margin with P
+        the plant's response as an identification result's data measured
+        it where they have it (NaN for a model without data): the margin
+        the design holds.
     band_fraction, smoothing, jump_samples : float, float, int
         The compensation: the share of the model's band inverted, the
         inverse's smoothing width (in the model's v) and the samples the
@@ -365,7 +370,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     modulus_margin : float, optional
         Required :math:`\min_\omega |1 + C P|`, in (0, 1) (default 0.6: a
         sensitivity peak of 1.67, gain margin >= 2.5, phase margin >= 35
-        deg).
+        deg). From an identification result, P is read where the data
+        measured it, the model where not (``ctrl.margins``).
     feedforward : {'preview', 'zpetc', None}, optional
         How zeros on or outside the unit circle are inverted: an
         anticausal series using reference preview (default), Tomizuka's
@@ -488,11 +494,15 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         if not 0.1 <= crossover_limit <= 1000:
             raise ValueError(f"crossover_limit must be in [0.1, 1000] "
                              f"plant bandwidths; got {crossover_limit!r}")
-    bands = sd.result_bands(result)
+    bands = sdata.result_bands(result)
+    response = sdata.measured_response(result)
 
     def limit(num, den):
-        return (sd.crossover_limit(bands, num, den) if crossover_limit is
-                None else (crossover_limit, 'as asked'))
+        return (sdata.crossover_limit(bands, num, den) if crossover_limit
+                is None else (crossover_limit, 'as asked'))
+
+    def measured(num, den):
+        return sdata.data_plant(response, bands, num, den)
     max_preview = check_int('max_preview', max_preview, minimum=0,
                             maximum=MAX_ORDER)
     name = check_name('name', name)
@@ -516,7 +526,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         P, pid, ff_model, linear_note, lin_model = sd.linear_part(
             model, result, lin_model, feedback_from, feedforward_from,
             integrating, ff_zeros, max_preview, mm, _check_plant_tf,
-            lambda n, d: limit(n, d)[0])
+            lambda n, d: limit(n, d)[0], measured)
     else:
         P, linear_note, pid = model, None, None
     num, den = _check_plant_tf('model' if P is model else 'the design plant',
@@ -525,7 +535,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     # the baseline's gains were designed when it was checked
     lim, lim_why = limit(num, den)
     kp, ki, kd, pole = pid if pid is not None else sd.design_pid(
-        num, den, dt, mm, lim)
+        num, den, dt, mm, lim, measured(num, den))
     scale = check_positive('feedback_scale', feedback_scale)
     kp, ki, kd = scale * kp, scale * ki, scale * kd
     C = sd.pid_tf(kp, ki, kd, pole, dt)
@@ -537,18 +547,22 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                          f"(pole radius {radius:.4g}); use a feedback_scale "
                          + ("smaller" if scale > 1 else "closer to 1")
                          + " (1 is the designed loop)")
+    data = measured(num, den)
+    mmeas = (np.nan if data is None else
+             sdata.measured_modulus(data, num, den, C))
+    where = sdata.margin_words(data, response, mmeas, mmod, num, den)
     notes.append(f"{'PD' if ki == 0 else 'PID'} with the largest "
                  f"{'proportional' if ki == 0 else 'integral'} gain at "
                  f"modulus margin {mm:g}{'' if ki == 0 else ' and |T| <= 1'}"
-                 f" (got {mmod:.3f} on a log grid from "
-                 f"{sd.frequency_grid(den)[0]:.1e} rad/sample), crossover "
-                 f"below {lim:.3g} plant bandwidths: {lim_why}")
+                 f"{where}, crossover below {lim:.3g} plant bandwidths: "
+                 f"{lim_why}")
     design = dict(model=model, dt=dt, kp=float(kp), ki=float(ki),
                   kd=float(kd), derivative_pole=float(pole),
                   pid=ct.tf(C.num[0][0], C.den[0][0], dt,
                                  inputs='e', outputs='u_fb'),
                   design_plant=P, crossover_limit=float(lim),
-                  margins=dict(modulus=mmod, gain=gm, phase=pm,
+                  margins=dict(modulus=mmod, modulus_measured=mmeas,
+                               gain=gm, phase=pm,
                                pole_radius=radius),
                   operating_point=(u0, y0), feedforward_kind=feedforward,
                   _fb=_ss(C.num[0][0], C.den[0][0], dt))

@@ -225,7 +225,7 @@ def _start(v, y, nb, m, nk, offsets=False):
 
 
 def fit_oe(u, y, shape, integrators, *, max_iter=100, tol=1e-10,
-           offsets=False):
+           offsets=False, start=None):
     """Output-error fit on already scaled arrays (no checks, no scaling).
 
     Parameters
@@ -246,6 +246,9 @@ def fit_oe(u, y, shape, integrators, *, max_iter=100, tol=1e-10,
         Also fit a constant output offset per experiment. They enter
         linearly, so they are projected out (variable projection): each
         experiment's residual and Jacobian are centred.
+    start : tuple of ndarray, optional
+        (B, F') to start from instead of the ARX start (F' the free factor,
+        monic, stable); an unstable or ill-sized one is not used.
 
     Returns
     -------
@@ -257,7 +260,7 @@ def fit_oe(u, y, shape, integrators, *, max_iter=100, tol=1e-10,
         ``nit``, ``converged`` and ``message``.
     """
     problem = _OutputError(u, y, shape, integrators, offsets)
-    return problem.result(problem.run(max_iter, tol))
+    return problem.result(problem.run(max_iter, tol, start))
 
 
 class _OutputError:
@@ -284,11 +287,19 @@ class _OutputError:
         return _normal(self.centre(_jacobian(b, fp, self.v, yhat, self.nk)),
                        self.centre(self.y - yhat))
 
-    def run(self, max_iter, tol):
-        """Levenberg-Marquardt from the `_start`: a dict of the final
-        iterate, its normal equations and the verdict."""
+    def run(self, max_iter, tol, start=None):
+        """Levenberg-Marquardt from `start` (B, F') where it fits, else
+        from the `_start`: a dict of the final iterate, its normal
+        equations and the verdict."""
         nb = self.nb
-        b, fp = _start(self.v, self.ys, nb, self.m, self.nk, self.offsets)
+        if (start is not None and np.size(start[0]) == nb
+                and np.size(start[1]) == self.m + 1
+                and np.all(np.isfinite(np.r_[start[0], start[1]]))
+                and max_root(np.asarray(start[1], float)) < RADIUS):
+            b, fp = (np.array(a, dtype=float) for a in start)
+        else:
+            b, fp = _start(self.v, self.ys, nb, self.m, self.nk,
+                           self.offsets)
         s = dict(theta=np.concatenate([b, fp[1:]]), b=b, fp=fp)
         s['yhat'] = _simulate(b, fp, self.v, self.nk)
         s['cost'] = cost = self.cost_of(s['yhat'])

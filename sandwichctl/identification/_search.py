@@ -36,7 +36,7 @@ from ._starts import (splits, opened, random_start, recursive_start,
                       held_starts, holds)
 from .linear import oe_transfer_function
 from .._checks import progress_bar
-from ..tools.residuals import error_bands
+from ..tools.residuals import error_bands, relative_error
 
 __all__ = []
 
@@ -98,11 +98,12 @@ class Task:
         opt = dataclasses.replace(self.opt, relocate=0, hops=0)
         return Task(self.u, ys, self.orders, opt, dt=self.dt)
 
-    def fit_linear(self, scaled, k):
-        """The linear output-error fit with k integrators on `scaled`."""
+    def fit_linear(self, scaled, k, start=None):
+        """The linear output-error fit with k integrators on `scaled`
+        (from `start`, `fit_oe`'s, if given)."""
         return fit_oe(scaled.u, scaled.y, self.shape, k,
                       max_iter=self.opt.max_iter, tol=self.opt.tol,
-                      offsets=self.offsets)
+                      offsets=self.offsets, start=start)
 
 
 def integrator_split(k, orders, block):
@@ -362,8 +363,9 @@ class Search:
         return out
 
     def _user_units(self, lin):
-        """fit, cost and transfer function in the user's units of a
-        linear model on the scaled data (``B``, ``F``, ``offsets``)."""
+        """fit, cost, transfer function and its B and F (integrators
+        included) in the user's units of a linear model on the scaled data
+        (``B``, ``F``, ``offsets``)."""
         prob, nk_l = self.probs[self.sign], self.task.shape[2]
         y_all = np.concatenate(self.task.y)
         r_lin = y_all - prob.sy * fit_output(
@@ -373,7 +375,10 @@ class Search:
                 'cost': 0.5 * float(r_lin @ r_lin),
                 'model': oe_transfer_function(lin['B'] * prob.sy / prob.su,
                                               lin['F'], nk_l, self.task.dt),
-                'error_bands': error_bands(r_lin, y_all - r_lin)}
+                'B': lin['B'] * prob.sy / prob.su,
+                'F': np.array(lin['F'], dtype=float),
+                'error_bands': error_bands(r_lin, y_all - r_lin),
+                'relative_error': relative_error(r_lin, y_all - r_lin)}
 
     def extend(self, s, phi):
         """A model start of sign s with the linear fit's output offsets

@@ -320,6 +320,34 @@ def residuals(model, data, lags=25, ax=None, plot=True):
 BANDS_PER_DECADE = 5
 
 
+def _band_sums(residuals, yhat):
+    """(centres, sum |E|^2, sum E conj(Yhat), sum |Yhat|^2, bins) per
+    band of `error_bands`; None for a record of fewer than 64 samples."""
+    e = np.asarray(residuals, dtype=float).reshape(-1)
+    yh = np.asarray(yhat, dtype=float).reshape(-1)
+    n = min(e.size, yh.size)
+    if n < 64:
+        return None
+    win = np.hanning(n)
+    E = np.fft.rfft((e[:n] - e[:n].mean()) * win)
+    Y = np.fft.rfft((yh[:n] - yh[:n].mean()) * win)
+    w = 2 * np.pi * np.arange(E.size) / n
+    lo = 2 * np.pi * 4 / n
+    edges = np.logspace(np.log10(lo), np.log10(np.pi),
+                        int(BANDS_PER_DECADE * np.log10(np.pi / lo)) + 1)
+    which = np.digitize(w, edges)
+    sums = []
+    for k in range(1, edges.size):
+        inside = which == k
+        if inside.any():
+            sums.append((np.sqrt(edges[k - 1] * edges[k]),
+                         np.sum(np.abs(E[inside]) ** 2),
+                         np.sum(E[inside] * np.conj(Y[inside])),
+                         max(np.sum(np.abs(Y[inside]) ** 2), 1e-300),
+                         inside.sum()))
+    return tuple(np.array(col) for col in zip(*sums))
+
+
 def error_bands(residuals, yhat):
     r"""The model's relative error by frequency band, from its residuals:
     (w, delta), with w the bands' centres in rad/sample (log-spaced,
@@ -346,24 +374,49 @@ def error_bands(residuals, yhat):
     >>> bool(delta[0] < 0.01 < delta[-1])
     True
     """
-    e = np.asarray(residuals, dtype=float).reshape(-1)
-    yh = np.asarray(yhat, dtype=float).reshape(-1)
-    n = min(e.size, yh.size)
-    if n < 64:
+    sums = _band_sums(residuals, yhat)
+    if sums is None:
         return np.zeros(0), np.zeros(0)
-    win = np.hanning(n)
-    E = np.abs(np.fft.rfft((e[:n] - e[:n].mean()) * win)) ** 2
-    Y = np.abs(np.fft.rfft((yh[:n] - yh[:n].mean()) * win)) ** 2
-    w = 2 * np.pi * np.arange(E.size) / n
-    lo = 2 * np.pi * 4 / n
-    edges = np.logspace(np.log10(lo), np.log10(np.pi),
-                        int(BANDS_PER_DECADE * np.log10(np.pi / lo)) + 1)
-    which = np.digitize(w, edges)
-    centre, delta = [], []
-    for k in range(1, edges.size):
-        inside = which == k
-        if inside.any():
-            centre.append(np.sqrt(edges[k - 1] * edges[k]))
-            delta.append(np.sqrt(E[inside].sum()
-                                 / max(Y[inside].sum(), 1e-300)))
-    return np.array(centre), np.array(delta)
+    w, ee, _, yy, _ = sums
+    return w, np.sqrt(ee / yy)
+
+
+def relative_error(residuals, yhat):
+    r"""The model's complex relative error by frequency band, from its
+    residuals: (w, Delta, sigma), on the bands of `error_bands`, with
+
+    .. math:: \Delta_k = \textstyle\sum_{\omega \in k} E(\omega)
+              \overline{\hat Y(\omega)} \big/ \sum_{\omega \in k}
+              |\hat Y(\omega)|^2 .
+
+    For an output-error model fitted to open-loop data, :math:`e = (P -
+    \hat P) u + v` and :math:`\hat y = \hat P u`, so Delta estimates
+    :math:`(P - \hat P) / \hat P` with the noise v averaged out (it is
+    uncorrelated with yhat): :math:`\hat P (1 + \Delta)` is the plant's
+    frequency response as the data measured it, gain and phase, where
+    `error_bands` only bounds the error's size. sigma is the standard
+    error of each Delta: what of the residual Delta does not explain,
+    averaged over the band's periodogram bins (counted as half as many
+    independent ones, for the Hann window). Empty arrays for a record of
+    fewer than 64 samples.
+
+    Examples
+    --------
+    A model 10 % short of the plant's gain:
+
+    >>> import numpy as np
+    >>> from sandwichctl.tools.residuals import relative_error
+    >>> rng = np.random.default_rng(0)
+    >>> yhat = np.cumsum(rng.standard_normal(4000))
+    >>> e = 0.1 * yhat + 0.01 * rng.standard_normal(4000)
+    >>> w, d, sigma = relative_error(e, yhat)
+    >>> bool(np.all(np.abs(d - 0.1) < np.maximum(3 * sigma, 1e-3)))
+    True
+    """
+    sums = _band_sums(residuals, yhat)
+    if sums is None:
+        return np.zeros(0), np.zeros(0, complex), np.zeros(0)
+    w, ee, ey, yy, bins = sums
+    delta = ey / yy
+    rest = np.maximum(ee / yy - np.abs(delta) ** 2, 0.0)
+    return w, delta, np.sqrt(rest / np.maximum(bins / 2, 1))

@@ -1,0 +1,161 @@
+"""What a servo design reads from the data of an identification result.
+
+`servo_controller` designs from a model; when that model comes with its
+identification record, the linear fit's residuals say how far to trust
+it, by frequency band (`tools.residuals.error_bands`,
+`tools.residuals.relative_error`):
+
+- how fast the PID may cross over (`crossover_limit`): up to where the
+  model's relative error stays small, between CROSSOVER_LIMIT['pid'] and
+  CROSSOVER_MOST plant bandwidths;
+- on what plant its margins are read (`data_plant`): the plant's
+  response as the data measured it (the fit corrected by the part of its
+  residual that follows the fit's own output), besides or instead of the
+  model.
+"""
+
+import numpy as np
+import control as ct
+
+from ._servo_design import (CROSSOVER_LIMIT, bandwidth, frequency_grid,
+                            loop_gain, tf_arrays)
+from ..tools.residuals import error_bands, relative_error
+
+__all__ = []
+
+#: a PID designed from an identification result may cross over above
+#: CROSSOVER_LIMIT['pid'], up to CROSSOVER_MOST plant bandwidths, as far
+#: as the residuals of its data put the model's relative error below
+#: TRUSTED in every band from the lowest up (`tools.residuals.error_bands`).
+#: The residuals of a drive with much play reach it within a few
+#: bandwidths (its limit stays 3: a larger one hunted when the load
+#: coasted, see above); those of a play-free one only beyond 10, and there
+#: the limit of 3, not the modulus margin, bound the loop. Robust
+#: stability asks |T| delta < 1: with |T| <= 1, TRUSTED leaves a factor 2
+TRUSTED = 0.5
+CROSSOVER_MOST = 8.0
+#: relative standard error up to which `measured_response` uses the data
+RELIABLE = 0.1
+
+
+def trusted_band(bands):
+    """The highest frequency (rad/sample) up to which every band of the
+    error bands (w, delta) has delta <= TRUSTED (0 if the first has
+    not)."""
+    w, delta = (np.asarray(a, float) for a in bands)
+    bad = np.nonzero(~(delta <= TRUSTED))[0]
+    return float(w[-1] if bad.size == 0 else
+                 (w[bad[0] - 1] if bad[0] else 0.0))
+
+
+def crossover_limit(bands, num, den):
+    """(limit, why): the crossover limit of `design_pid` in plant
+    bandwidths for the plant num/den, given the error bands (w, delta) of
+    its data (`tools.residuals.error_bands`, None for a model without
+    data), and why in words."""
+    if np.any(np.abs(np.roots(den) - 1) < 1e-6):
+        return CROSSOVER_LIMIT['pd'], "the PD's of an integrating plant"
+    base = CROSSOVER_LIMIT['pid']
+    if bands is None or len(bands[0]) == 0:
+        return base, 'the default, for a model without data'
+    wb = bandwidth(num, den, frequency_grid(den))
+    trusted = trusted_band(bands)
+    limit = float(np.clip(trusted / wb, base, CROSSOVER_MOST))
+    return limit, (
+        f"the data's residuals put the model's relative error below "
+        f"{TRUSTED:g} up to {trusted / wb:.3g} plant bandwidths "
+        f"(limit {base:g} to {CROSSOVER_MOST:g})")
+
+
+def measured_response(result):
+    """The plant's frequency response as the data of an identification
+    result measured it: a callable of w (rad/sample) giving the baseline
+    fit's response times 1 + its relative error (`tools.residuals.
+    relative_error`, interpolated on log w), NaN outside the bands from
+    the lowest up to the last whose standard error is below RELIABLE;
+    with the top of that range. None for no result, a result without
+    them or no reliable band."""
+    e, yhat = (getattr(result, key, None) for key in ('residuals', 'yhat'))
+    linear = getattr(result, 'linear', None)
+    if e is not None and yhat is not None:
+        base, rel = result.model, relative_error(e, yhat)
+    elif isinstance(linear, dict) and 'relative_error' in linear:
+        base, rel = linear.get('model'), linear['relative_error']
+    else:
+        return None
+    wk, dk, sk = (np.asarray(a) for a in rel)
+    bad = np.flatnonzero(~(sk <= RELIABLE))
+    top = wk[-1] if bad.size == 0 else (wk[bad[0] - 1] if bad[0] else 0.0)
+    if not isinstance(base, ct.TransferFunction) or not top > wk[0]:
+        return None
+    num, den = tf_arrays(base)
+
+    def response(w):
+        w, lw = np.asarray(w, float), np.log(np.maximum(w, 1e-300))
+        d = (np.interp(lw, np.log(wk), dk.real)
+             + 1j * np.interp(lw, np.log(wk), dk.imag))
+        return np.where((w >= wk[0]) & (w <= top), (1 + d) * np.polyval(
+            num, np.exp(1j * w)) / np.polyval(den, np.exp(1j * w)), np.nan)
+    return response, top
+
+
+def measured_modulus(measured, num, den, C):
+    """The modulus margin of the loop C P on the log grid, with P the
+    measured response where it has data and the plant num/den elsewhere;
+    measured is `data_plant`'s, and where it is not alone the margin is
+    the smaller of that and the model's."""
+    w = frequency_grid(den, 6000)
+    (G, alone), one = (measured[0](w), measured[1]), np.ones(1)
+    L = loop_gain(num, den, C, w)
+    mixed = np.where(np.isfinite(G), G * loop_gain(one, one, C, w), L)
+    mm = float(np.min(np.abs(1 + mixed)))
+    return mm if alone else min(mm, float(np.min(np.abs(1 + L))))
+
+
+def result_bands(result):
+    """The error bands (w, delta) of an identification result's linear
+    fit (`tools.residuals.error_bands`): of `identify_linear`'s from its
+    residuals, of `identify`'s as it stored them for its baseline; None
+    for no result or a result without them."""
+    e, yhat = (getattr(result, key, None) for key in ('residuals', 'yhat'))
+    if e is not None and yhat is not None:
+        return error_bands(e, yhat)
+    linear = getattr(result, 'linear', None)
+    return linear.get('error_bands') if isinstance(linear, dict) else None
+
+
+def data_plant(measured, bands, num, den):
+    """`design_pid`'s `measured` for the plant num/den: (response, alone),
+    with response `measured_response`'s callable and alone whether the
+    margins are read on it alone (else on it and the model both); None
+    without a measured response. Alone only where the residuals vouch
+    for the model up to CROSSOVER_MOST plant bandwidths (`trusted_band`):
+    a record of a drive with play measures the response at its own
+    amplitude, and a speed loop's PD designed on it alone hunted where the
+    model's did not (random drive 39 of benchmarks/bench_servo.py, 42 um:
+    18 reversals in a hold, 3.4 -> 10.5 um)."""
+    if measured is None:
+        return None
+    wb = bandwidth(num, den, frequency_grid(den))
+    alone = bands is not None and len(bands[0]) > 0 and \
+        trusted_band(bands) >= CROSSOVER_MOST * wb
+    return measured[0], bool(alone)
+
+
+def margin_words(data, response, mmeas, mmod, num, den):
+    """Where the design's margins were read, in words, for its notes:
+    `data_plant`'s data, `measured_response`'s (response, top), the
+    margin so measured and the model's, for the plant num/den."""
+    grid = frequency_grid(den)
+    if data is None:
+        return f" (got {mmod:.3f} on a log grid from {grid[0]:.1e} rad/sample)"
+    top = f"{response[1] / bandwidth(num, den, grid):.3g} plant bandwidths"
+    how = ("the baseline fit's response corrected by its residuals, tools."
+           "residuals.relative_error")
+    return ((f", read on the plant's response as the data measured it up to "
+             f"{top} ({how}) and on the model above" if data[1] else
+             f", read on the model and, up to {top}, on the plant's response "
+             f"as the data measured it ({how}) too: the residuals vouch for "
+             f"the model only below {CROSSOVER_MOST:g} plant bandwidths")
+            + f" (got {mmeas:.3f}; {mmod:.3f} on the model alone, on a log "
+            f"grid from {grid[0]:.1e} rad/sample)")
