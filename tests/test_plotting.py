@@ -99,3 +99,29 @@ def test_errors():
         sw.plot_hysteresis(sw.Backlash(1, 1, 0.5, 0.5), true='plant')
     with pytest.raises(ValueError, match=r"x must be finite"):
         sw.plot_hysteresis(sw.Backlash(1, 1, 0.5, 0.5), x=[0, np.inf])
+
+
+def test_loop_sensitivity_on_the_model_and_the_measured_response(
+        ax, lagged_fit):
+    # a first-order fit of a plant with a second lag: the curves part
+    lin = lagged_fit[1]
+    ctrl = sw.servo_controller(lin)
+    assert sw.plot_loop(ctrl, ax=ax) is ax
+    model, measured = _curve(ax, 0), _curve(ax, 2)
+    assert model[0][-1] == pytest.approx(500.0, rel=1e-3)     # Nyquist, Hz
+    # the peaks are 1 / the margins the design reports
+    m = ctrl.margins
+    assert np.max(model[1]) == pytest.approx(1 / m['modulus'], rel=0.02)
+    assert np.max(measured[1]) == pytest.approx(1 / m['modulus_measured'],
+                                                rel=0.02)
+    assert 'measured' in ax.get_legend().get_texts()[1].get_text()
+    assert f"{m['modulus_measured']:.3f}" in ax.get_title()
+    # a model without data: the model's curve alone
+    fig, ax2 = plt.subplots()
+    sw.plot_loop(sw.servo_controller(lin.model), ax=ax2)
+    assert len(ax2.get_legend().get_texts()) == 1
+    plt.close(fig)
+    with pytest.raises(TypeError, match='ServoController'):
+        sw.plot_loop(lin)
+    with pytest.raises(TypeError, match='Axes'):
+        sw.plot_loop(ctrl, ax='here')

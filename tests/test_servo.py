@@ -236,17 +236,12 @@ def test_a_play_free_position_pid_uses_the_room_its_data_leave():
     assert 2.2 < _crossover_ratio(fixed) <= 3.0
 
 
-def test_the_margin_is_held_on_the_response_the_data_measured():
+def test_the_margin_is_held_on_the_response_the_data_measured(lagged_fit):
     # a first-order fit of a plant with a second lag: the model alone
     # overstates the margin, the data correct it
-    rng = np.random.default_rng(0)
-    P = ct.tf([0.05], [1, -0.95], 1) * ct.tf([0.5], [1, -0.5], 1)
-    u = np.repeat(rng.standard_normal(200), 20) + 0.3 * rng.standard_normal(
-        4000)
-    y = ct.forced_response(P, U=u).outputs + 1e-3 * rng.standard_normal(4000)
-    lin = sw.identify_linear(u, y, nb=1, nf=1, nk=1, dt=1)
+    P, lin = lagged_fit
     ctrl = sw.servo_controller(lin)
-    C = sd.pid_tf(ctrl.kp, ctrl.ki, ctrl.kd, ctrl.derivative_pole, 1)
+    C = sd.pid_tf(ctrl.kp, ctrl.ki, ctrl.kd, ctrl.derivative_pole, lin.dt)
     true = sd.loop_margins(*sd.tf_arrays(P), C)[0]
     m = ctrl.margins
     assert m['modulus_measured'] >= 0.6 * (1 - 1e-3)

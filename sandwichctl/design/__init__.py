@@ -11,7 +11,8 @@
   steps, and `_servo_kernel`, its compiled step).
 - `loop`: the loop of a servo controller around any plant, and
   `servo_metrics`.
-- `closedloop`: `closed_loop_response` and `closed_loop_system`.
+- `closedloop`: `closed_loop_response` and `closed_loop_system`, and
+  `plot_loop`, a servo loop's sensitivity.
 - `demo`: `closed_loop_demo`, the same plant with and without
   compensation.
 - `descfcn`: the backlash's describing function and limit cycles.

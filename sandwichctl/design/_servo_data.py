@@ -142,6 +142,16 @@ def data_plant(measured, bands, num, den):
     return measured[0], bool(alone)
 
 
+def measured_arrays(data, den):
+    """(w, P): `data_plant`'s measured response where it has data, on the
+    log grid of the plant with denominator den; None without data."""
+    if data is None:
+        return None
+    w = frequency_grid(den)
+    G = data[0](w)
+    return w[np.isfinite(G)], G[np.isfinite(G)]
+
+
 def margin_words(data, response, mmeas, mmod, num, den):
     """Where the design's margins were read, in words, for its notes:
     `data_plant`'s data, `measured_response`'s (response, top), the

@@ -6,7 +6,9 @@ front of a `SandwichSystem`, by a compiled kernel; a `ServoController`
 (module `servo`) against any plant with a ``step(u) -> y`` method (module
 `loop`). `closed_loop_system` builds the first loop as a python-control
 system, its oracle. `closed_loop_demo` (module `demo`) compares loops with
-and without compensation.
+and without compensation. `plot_loop` draws a `ServoController`'s
+sensitivity on its model and on the plant's response as the
+identification record measured it.
 
 Chattering in closed loop
 -------------------------
@@ -36,12 +38,14 @@ from .compensator import SandwichCompensator, _check_model
 from .tracking import TrackingController
 from .loop import servo_loop, plant_measure, plant_advance, ss_arrays
 from .servo import ServoController
+from ._servo_design import frequency_grid, tf_arrays
 from ..model._kernel import _ss_output, _ss_update
 from ..model.sandwich import SandwichSystem, _warn_divergence
 from .._checks import (check_discrete_siso_tf, check_signal, common_dt,
-                       check_name)
+                       check_name, check_axes)
 
-__all__ = ['closed_loop_system', 'ClosedLoopSystem', 'closed_loop_response']
+__all__ = ['closed_loop_system', 'ClosedLoopSystem', 'closed_loop_response',
+           'plot_loop']
 
 
 @numba.njit(cache=True)
@@ -334,3 +338,77 @@ def _rebuild_loop(parts, name, inputs, outputs, states, params):
     loop.set_states(states)
     loop.params = params
     return loop
+
+def plot_loop(ctrl, ax=None):
+    r"""Plot a servo loop's sensitivity :math:`|S| = 1 / |1 + C P|` on its
+    model and on the plant's response as the identification record
+    measured it.
+
+    The design holds its modulus margin, :math:`\min |1 + C P|`, on the
+    measured response where the record has it (``ctrl.margins
+    ['modulus_measured']``, in the title): where the two curves part,
+    the record says the model is wrong there, and the measured one is the
+    loop the axis will see. The peak of each is marked.
+
+    Parameters
+    ----------
+    ctrl : ServoController
+        A design of `servo_controller`.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; default the current axes.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on: frequency in Hz (in rad/sample when the model's
+        dt is True), :math:`|S|` on a log scale.
+
+    Raises
+    ------
+    TypeError
+        If `ctrl` is not a `ServoController` or `ax` not an Axes.
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use('Agg')
+    >>> import control as ct, sandwichctl as sw
+    >>> ctrl = sw.servo_controller(ct.tf([0.1], [1, -0.9], 0.001))
+    >>> ax = sw.plot_loop(ctrl)
+    >>> ax.get_ylabel()
+    '|S| = 1 / |1 + C P|'
+    """
+    if not isinstance(ctrl, ServoController):
+        raise TypeError(f"ctrl must be a ServoController (of "
+                        f"sw.servo_controller); got {type(ctrl).__name__}")
+    if check_axes('ax', ax) is None:
+        import matplotlib.pyplot as plt
+        ax = plt.gca()
+    num, den = tf_arrays(ctrl.design_plant)
+    w = frequency_grid(den)
+    curves = [(w, np.polyval(num, np.exp(1j * w))
+               / np.polyval(den, np.exp(1j * w)), 'on the model', '-')]
+    if ctrl.measured_response is not None:
+        curves.append((*ctrl.measured_response, 'on the measured response',
+                       '--'))
+    hz = ctrl.dt is not True
+    for wk, P, label, style in curves:
+        z = np.exp(1j * wk)
+        C = (np.polyval(ctrl.pid.num[0][0], z)
+             / np.polyval(ctrl.pid.den[0][0], z))
+        S = 1 / np.abs(1 + C * P)
+        f = wk / (2 * np.pi * ctrl.dt) if hz else wk
+        top = np.argmax(S)
+        line, = ax.loglog(f, S, style, lw=1.6, label=(
+            f"{label}, up to {f[-1]:.3g} {'Hz' if hz else 'rad/sample'}"
+            if style == '--' else
+            f"{label} (modulus margin {1 / S[top]:.3f})"))
+        ax.plot(f[top], S[top], 'o', color=line.get_color())
+    ax.axhline(1.0, color='grey', lw=0.8)
+    ax.set_xlabel('frequency (Hz)' if hz else 'frequency (rad/sample)')
+    ax.set_ylabel('|S| = 1 / |1 + C P|')
+    held = ctrl.margins['modulus_measured']
+    ax.set_title('Sensitivity of the servo loop' + (
+        '' if np.isnan(held) else f': modulus margin {held:.3f} held'))
+    ax.legend(fontsize='small')
+    return ax

@@ -195,6 +195,9 @@ class ServoController(ct.NonlinearIOSystem):
         the plant's response as an identification result's data measured
         it where they have it (NaN for a model without data): the margin
         the design holds.
+    measured_response : tuple of ndarray or None
+        (w, P) of that response, w in rad/sample (`plot_loop` draws
+        the loop on it); None for a model without data.
     band_fraction, smoothing, jump_samples : float, float, int
         The compensation: the share of the model's band inverted, the
         inverse's smoothing width (in the model's v) and the samples the
@@ -561,6 +564,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                   pid=ct.tf(C.num[0][0], C.den[0][0], dt,
                                  inputs='e', outputs='u_fb'),
                   design_plant=P, crossover_limit=float(lim),
+                  measured_response=sdata.measured_arrays(data, den),
                   margins=dict(modulus=mmod, modulus_measured=mmeas,
                                gain=gm, phase=pm,
                                pole_radius=radius),
