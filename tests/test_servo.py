@@ -251,6 +251,16 @@ def test_the_margin_is_held_on_the_response_the_data_measured(lagged_fit):
         'modulus_measured'])
 
 
+def test_a_record_too_short_to_measure_designs_on_the_model(rng):
+    u = rng.standard_normal(50)             # below the 64 samples of a band
+    y = ct.forced_response(ct.tf([0.1], [1, -0.9], 1), U=u).outputs
+    lin = sw.identify_linear(u, y, nb=1, nf=1, nk=1, dt=1)
+    ctrl = sw.servo_controller(lin)
+    assert np.isnan(ctrl.margins['modulus_measured'])
+    assert ctrl.measured_response is None
+    assert ctrl.margins['modulus'] >= 0.6 * (1 - 1e-3)
+
+
 def test_the_residuals_of_a_drive_with_much_play_keep_the_fixed_limit():
     case = sw.data.drive_case(0, 'position', 200e-6, n=3000)
     lin = sw.identify_linear(case.u, case.y, nb=3, nf=4, nk=1, dt=case.dt)

@@ -84,6 +84,8 @@ def measured_response(result):
     else:
         return None
     wk, dk, sk = (np.asarray(a) for a in rel)
+    if wk.size == 0:                # a record of fewer than 64 samples
+        return None
     bad = np.flatnonzero(~(sk <= RELIABLE))
     top = wk[-1] if bad.size == 0 else (wk[bad[0] - 1] if bad[0] else 0.0)
     if not isinstance(base, ct.TransferFunction) or not top > wk[0]:
@@ -128,7 +130,10 @@ def data_plant(measured, bands, num, den):
     """`design_pid`'s `measured` for the plant num/den: (response, alone),
     with response `measured_response`'s callable and alone whether the
     margins are read on it alone (else on it and the model both); None
-    without a measured response. Alone only where the residuals vouch
+    without a measured response, or one that turns the design plant's
+    phase by 90 deg or more where it starts (the plant is then not the
+    baseline the data measured, and does not move the output the same
+    way). Alone only where the residuals vouch
     for the model up to CROSSOVER_MOST plant bandwidths (`trusted_band`):
     a record of a drive with play measures the response at its own
     amplitude, and a speed loop's PD designed on it alone hunted where the
@@ -136,7 +141,14 @@ def data_plant(measured, bands, num, den):
     18 reversals in a hold, 3.4 -> 10.5 um)."""
     if measured is None:
         return None
-    wb = bandwidth(num, den, frequency_grid(den))
+    w = frequency_grid(den)
+    G = measured[0](w)
+    have = np.flatnonzero(np.isfinite(G))
+    z = np.exp(1j * w[have[0]]) if have.size else None
+    if z is None or not np.real(G[have[0]] * np.polyval(den, z)
+                                / np.polyval(num, z)) > 0:
+        return None
+    wb = bandwidth(num, den, w)
     alone = bands is not None and len(bands[0]) > 0 and \
         trusted_band(bands) >= CROSSOVER_MOST * wb
     return measured[0], bool(alone)
