@@ -17,8 +17,8 @@ it, by frequency band (`tools.residuals.error_bands`,
 import numpy as np
 import control as ct
 
-from ._servo_design import (CROSSOVER_LIMIT, bandwidth, frequency_grid,
-                            loop_gain, tf_arrays)
+from ._servo_design import (CROSSOVER_LIMIT, bandwidth, constraint_columns,
+                            frequency_grid, loop_gain, tf_arrays)
 from ..tools.residuals import error_bands, relative_error
 
 __all__ = []
@@ -102,16 +102,15 @@ def measured_response(result):
 
 
 def measured_modulus(measured, num, den, C):
-    """The modulus margin of the loop C P on the log grid, with P the
-    measured response where it has data and the plant num/den elsewhere;
-    measured is `data_plant`'s, and where it is not alone the margin is
-    the smaller of that and the model's."""
+    """The modulus margin of the loop C P on the log grid, read where
+    `design_pid` reads it (`constraint_columns`): with `data_plant`'s
+    `measured`, on the measured response where it has data and on the
+    plant num/den elsewhere, and on the plant too unless alone."""
     w = frequency_grid(den, 6000)
-    (G, alone), one = (measured[0](w), measured[1]), np.ones(1)
-    L = loop_gain(num, den, C, w)
-    mixed = np.where(np.isfinite(G), G * loop_gain(one, one, C, w), L)
-    mm = float(np.min(np.abs(1 + mixed)))
-    return mm if alone else min(mm, float(np.min(np.abs(1 + L))))
+    wc, P = constraint_columns(w, np.polyval(num, np.exp(1j * w))
+                               / np.polyval(den, np.exp(1j * w)), measured)
+    one = np.ones(1)
+    return float(np.min(np.abs(1 + P * loop_gain(one, one, C, wc))))
 
 
 def result_bands(result):

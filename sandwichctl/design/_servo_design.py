@@ -223,6 +223,22 @@ def low_frequency_sign(num, den):
     return 1.0 if n / d >= 0 else -1.0
 
 
+def constraint_columns(w, P, measured, sign=1.0):
+    """(w, P) at which a design's constraints are read: the plant's
+    response P on the grid w; with `measured` (`_servo_data.data_plant`'s
+    (response, alone)) the response the data measured in its place where
+    it has data when alone, else appended to it (the constraints then
+    hold on both). `sign` multiplies the measured response (a design
+    with negated gains reads a negated plant)."""
+    if measured is None:
+        return w, P
+    G = sign * measured[0](w)
+    have = np.isfinite(G)
+    if measured[1]:
+        return w, np.where(have, G, P)
+    return np.r_[w, w[have]], np.r_[P, G[have]]
+
+
 def design_pid(num, den, dt, modulus_margin, limit=None, measured=None):
     """PID gains (kp, ki, kd, pole) for the plant num/den (descending
     powers of z, at most one pole at z = 1): the largest ki under the
@@ -257,14 +273,8 @@ def design_pid(num, den, dt, modulus_margin, limit=None, measured=None):
     k0 = min(1.0 / np.abs(P[cross[0] if cross.size else -1]),
              1.0 / np.abs(P[np.searchsorted(w, wb)]))
     # the frequencies (columns) the constraints are read at
-    wc, zc = w, z
-    if measured is not None:
-        G, alone = sign * measured[0](w), measured[1]
-        have = np.isfinite(G)
-        if alone:
-            P = np.where(have, G, P)
-        else:               # both: the measured frequencies appended
-            wc, zc, P = np.r_[w, w[have]], np.r_[z, z[have]], np.r_[P, G[have]]
+    wc, P = constraint_columns(w, P, measured, sign)
+    zc = np.exp(1j * wc)
     high = wc > limit * wb
     I = zc / (zc - 1)
 

@@ -38,7 +38,7 @@ from .compensator import SandwichCompensator, _check_model
 from .tracking import TrackingController
 from .loop import servo_loop, plant_measure, plant_advance, ss_arrays
 from .servo import ServoController
-from ._servo_design import frequency_grid, tf_arrays
+from ._servo_design import frequency_grid, loop_gain, tf_arrays
 from ..model._kernel import _ss_output, _ss_update
 from ..model.sandwich import SandwichSystem, _warn_divergence
 from .._checks import (check_discrete_siso_tf, check_signal, common_dt,
@@ -339,6 +339,7 @@ def _rebuild_loop(parts, name, inputs, outputs, states, params):
     loop.params = params
     return loop
 
+
 def plot_loop(ctrl, ax=None):
     r"""Plot a servo loop's sensitivity :math:`|S| = 1 / |1 + C P|` on its
     model and on the plant's response as the identification record
@@ -385,18 +386,15 @@ def plot_loop(ctrl, ax=None):
         import matplotlib.pyplot as plt
         ax = plt.gca()
     num, den = tf_arrays(ctrl.design_plant)
-    w = frequency_grid(den)
-    curves = [(w, np.polyval(num, np.exp(1j * w))
-               / np.polyval(den, np.exp(1j * w)), 'on the model', '-')]
+    w, one = frequency_grid(den), np.ones(1)
+    curves = [(w, loop_gain(num, den, ctrl.pid, w), 'on the model', '-')]
     if ctrl.measured_response is not None:
-        curves.append((*ctrl.measured_response, 'on the measured response',
-                       '--'))
+        wm, G = ctrl.measured_response
+        curves.append((wm, G * loop_gain(one, one, ctrl.pid, wm),
+                       'on the measured response', '--'))
     hz = ctrl.dt is not True
-    for wk, P, label, style in curves:
-        z = np.exp(1j * wk)
-        C = (np.polyval(ctrl.pid.num[0][0], z)
-             / np.polyval(ctrl.pid.den[0][0], z))
-        S = 1 / np.abs(1 + C * P)
+    for wk, L, label, style in curves:
+        S = 1 / np.abs(1 + L)
         f = wk / (2 * np.pi * ctrl.dt) if hz else wk
         top = np.argmax(S)
         line, = ax.loglog(f, S, style, lw=1.6, label=(

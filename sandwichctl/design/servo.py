@@ -149,8 +149,6 @@ def _check_plant_tf(name, sys):
     return num, den
 
 
-
-
 class ServoController(ct.NonlinearIOSystem):
     r"""A discrete servo controller: ``u(k) = ctrl.step(r_ahead, y)``.
 
@@ -537,8 +535,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     dt = P.dt
     # the baseline's gains were designed when it was checked
     lim, lim_why = limit(num, den)
+    data = measured(num, den)
     kp, ki, kd, pole = pid if pid is not None else sd.design_pid(
-        num, den, dt, mm, lim, measured(num, den))
+        num, den, dt, mm, lim, data)
     scale = check_positive('feedback_scale', feedback_scale)
     kp, ki, kd = scale * kp, scale * ki, scale * kd
     C = sd.pid_tf(kp, ki, kd, pole, dt)
@@ -550,7 +549,6 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                          f"(pole radius {radius:.4g}); use a feedback_scale "
                          + ("smaller" if scale > 1 else "closer to 1")
                          + " (1 is the designed loop)")
-    data = measured(num, den)
     mmeas = (np.nan if data is None else
              sdata.measured_modulus(data, num, den, C))
     where = sdata.margin_words(data, response, mmeas, mmod, num, den)
