@@ -19,7 +19,7 @@ import control as ct
 
 from ._servo_design import (CROSSOVER_LIMIT, bandwidth, constraint_columns,
                             frequency_grid, loop_gain, tf_arrays)
-from ..tools.residuals import error_bands, relative_error
+from ..tools.residuals import band_errors
 
 __all__ = []
 
@@ -67,28 +67,23 @@ def crossover_limit(bands, num, den):
         f"(limit {base:g} to {CROSSOVER_MOST:g})")
 
 
-def measured_response(result):
+def measured_response(base, rel):
     """The plant's frequency response as the data of an identification
-    result measured it: a callable of w (rad/sample) giving the baseline
-    fit's response times 1 + its relative error (`tools.residuals.
-    relative_error`, interpolated on log w), NaN outside the bands from
-    the lowest up to the last whose standard error is below RELIABLE;
-    with the top of that range. None for no result, a result without
-    them or no reliable band."""
-    e, yhat = (getattr(result, key, None) for key in ('residuals', 'yhat'))
-    linear = getattr(result, 'linear', None)
-    if e is not None and yhat is not None:
-        base, rel = result.model, relative_error(e, yhat)
-    elif isinstance(linear, dict) and 'relative_error' in linear:
-        base, rel = linear.get('model'), linear['relative_error']
-    else:
+    result measured it, from its baseline fit `base` and that fit's
+    relative error `rel` (`result_errors`): a callable of w (rad/sample)
+    giving the baseline's response times 1 + the relative error
+    (`tools.residuals.relative_error`, interpolated on log w), NaN outside
+    the bands from the lowest up to the last whose standard error is
+    below RELIABLE; with the top of that range. None without them or
+    without a reliable band."""
+    if rel is None or not isinstance(base, ct.TransferFunction):
         return None
     wk, dk, sk = (np.asarray(a) for a in rel)
     if wk.size == 0:                # a record of fewer than 64 samples
         return None
     bad = np.flatnonzero(~(sk <= RELIABLE))
     top = wk[-1] if bad.size == 0 else (wk[bad[0] - 1] if bad[0] else 0.0)
-    if not isinstance(base, ct.TransferFunction) or not top > wk[0]:
+    if not top > wk[0]:
         return None
     num, den = tf_arrays(base)
 
@@ -113,16 +108,20 @@ def measured_modulus(measured, num, den, C):
     return float(np.min(np.abs(1 + P * loop_gain(one, one, C, wc))))
 
 
-def result_bands(result):
-    """The error bands (w, delta) of an identification result's linear
-    fit (`tools.residuals.error_bands`): of `identify_linear`'s from its
-    residuals, of `identify`'s as it stored them for its baseline; None
-    for no result or a result without them."""
+def result_errors(result):
+    """(error bands, relative error, baseline) of an identification
+    result's linear fit (`tools.residuals.band_errors`): of
+    `identify_linear`'s from its residuals, of `identify`'s as it stored
+    them for its baseline; None for each it has not (no result, or a
+    result of an older version)."""
     e, yhat = (getattr(result, key, None) for key in ('residuals', 'yhat'))
     if e is not None and yhat is not None:
-        return error_bands(e, yhat)
+        return (*band_errors(e, yhat), result.model)
     linear = getattr(result, 'linear', None)
-    return linear.get('error_bands') if isinstance(linear, dict) else None
+    if not isinstance(linear, dict):
+        return None, None, None
+    return (linear.get('error_bands'), linear.get('relative_error'),
+            linear.get('model'))
 
 
 def data_plant(measured, bands, num, den):

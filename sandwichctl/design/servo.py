@@ -495,8 +495,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         if not 0.1 <= crossover_limit <= 1000:
             raise ValueError(f"crossover_limit must be in [0.1, 1000] "
                              f"plant bandwidths; got {crossover_limit!r}")
-    bands = sdata.result_bands(result)
-    response = sdata.measured_response(result)
+    bands, relative, baseline = sdata.result_errors(result)
+    response = sdata.measured_response(baseline, relative)
 
     def limit(num, den):
         return (sdata.crossover_limit(bands, num, den) if crossover_limit

@@ -36,7 +36,7 @@ from ._starts import (splits, opened, random_start, recursive_start,
                       held_starts, holds)
 from .linear import oe_transfer_function
 from .._checks import progress_bar
-from ..tools.residuals import error_bands, relative_error
+from ..tools.residuals import band_errors
 
 __all__ = []
 
@@ -371,14 +371,14 @@ class Search:
         r_lin = y_all - prob.sy * fit_output(
             lin, [part / prob.su for part in prob.u_user], nk_l)
         denom = np.linalg.norm(y_all - y_all.mean())
+        bands, relative = band_errors(r_lin, y_all - r_lin)
         return {'fit': float(100 * (1 - np.linalg.norm(r_lin) / denom)),
                 'cost': 0.5 * float(r_lin @ r_lin),
                 'model': oe_transfer_function(lin['B'] * prob.sy / prob.su,
                                               lin['F'], nk_l, self.task.dt),
                 'B': lin['B'] * prob.sy / prob.su,
                 'F': np.array(lin['F'], dtype=float),
-                'error_bands': error_bands(r_lin, y_all - r_lin),
-                'relative_error': relative_error(r_lin, y_all - r_lin)}
+                'error_bands': bands, 'relative_error': relative}
 
     def extend(self, s, phi):
         """A model start of sign s with the linear fit's output offsets

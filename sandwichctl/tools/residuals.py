@@ -374,11 +374,7 @@ def error_bands(residuals, yhat):
     >>> bool(delta[0] < 0.01 < delta[-1])
     True
     """
-    sums = _band_sums(residuals, yhat)
-    if sums is None:
-        return np.zeros(0), np.zeros(0)
-    w, ee, _, yy, _ = sums
-    return w, np.sqrt(ee / yy)
+    return band_errors(residuals, yhat)[0]
 
 
 def relative_error(residuals, yhat):
@@ -413,10 +409,18 @@ def relative_error(residuals, yhat):
     >>> bool(np.all(np.abs(d - 0.1) < np.maximum(3 * sigma, 1e-3)))
     True
     """
+    return band_errors(residuals, yhat)[1]
+
+
+def band_errors(residuals, yhat):
+    """(`error_bands`, `relative_error`) of the same residuals, from one
+    pass over their spectra."""
     sums = _band_sums(residuals, yhat)
     if sums is None:
-        return np.zeros(0), np.zeros(0, complex), np.zeros(0)
+        return ((np.zeros(0), np.zeros(0)),
+                (np.zeros(0), np.zeros(0, complex), np.zeros(0)))
     w, ee, ey, yy, bins = sums
     delta = ey / yy
     rest = np.maximum(ee / yy - np.abs(delta) ** 2, 0.0)
-    return w, delta, np.sqrt(rest / np.maximum(bins / 2, 1))
+    return ((w, np.sqrt(ee / yy)),
+            (w, delta, np.sqrt(rest / np.maximum(bins / 2, 1))))
