@@ -40,13 +40,15 @@ inverted, the same feedback and band) and prints both ratios. With
 identified (`MISMATCH`: a heavier load with less friction, a stiffer
 inner loop, less and more play) and counts the hunting there.
 ``--crossover X`` sets the PID's crossover limit of a model without data
-(`CROSSOVER_LIMIT['pid']`), and ``--fixed-crossover`` holds every design
-at it (no extension from the residuals of the record), to compare.
+(`CROSSOVER_LIMIT['pid']`), ``--fixed-crossover`` holds every design
+at it (no extension from the residuals of the record), and ``--peak-t M``
+bounds the PID's complementary sensitivity at M instead of 1
+(`T_PEAK`), to compare.
 
 Run: python benchmarks/bench_servo.py [--seeds 2] [--random 8] [--sweep]
      [--seed0 2 --random0 8] [--feedforward zpetc] [--bands]
      [--to-margin] [--sources] [--mismatch] [--crossover 2]
-     [--fixed-crossover]
+     [--fixed-crossover] [--peak-t 1.15]
 """
 
 import argparse
@@ -182,6 +184,10 @@ def main():
                     choices=['preview', 'zpetc'],
                     help='how both designs invert zeros outside the unit '
                     'circle')
+    ap.add_argument('--peak-t', type=float, default=None,
+                    help="the bound on |T| of the PID's design (T_PEAK of "
+                    "sandwichctl.design._servo_design, 1 by default), to "
+                    "compare")
     ap.add_argument('--fixed-crossover', action='store_true',
                     help="hold the PID's crossover limit at "
                     "CROSSOVER_LIMIT['pid'] (no extension from the "
@@ -189,6 +195,8 @@ def main():
     args = ap.parse_args()
     if args.crossover is not None:
         sd.CROSSOVER_LIMIT['pid'] = args.crossover
+    if args.peak_t is not None:
+        sd.T_PEAK = args.peak_t
     if args.fixed_crossover:
         sdata.CROSSOVER_MOST = sd.CROSSOVER_LIMIT['pid']
     rows, checks, bands, margin, sources, swept = [], [], [], [], [], []
@@ -224,7 +232,7 @@ def main():
                 sweep.append(run(scaled, r, loop, 0.0, dt, params,
                                  seed + 500)['rms'])
             best = f"{min(sweep) * 1e6:.1f}"
-            swept.append(m_0['rms'] / min(sweep))
+            swept.append((loop, m_0['rms'] / min(sweep)))
         for name, m in (('linear', m_lin), ('sandwich', m_sw)):
             rows.append([label, f"{play * 1e6:.0f}", name,
                          f"{m['rms'] * 1e6:.1f}", f"{m['max'] * 1e6:.0f}",
@@ -269,9 +277,10 @@ def main():
                 mism.append([label, f"{play * 1e6:.0f}", what,
                              f"{a['rms'] * 1e6:.1f}", a['hunting'],
                              f"{b['rms'] * 1e6:.1f}", b['hunting'],
-                             f"{b['rms'] / a['rms']:.2f}"])
-        checks.append(dict(label=label, play=play, lin=m_lin, sw=m_sw,
-                           res=res))
+                             f"{b['rms'] / a['rms']:.2f}",
+                             b['rms'] / a['rms']])
+        checks.append(dict(label=label, loop=loop, play=play, lin=m_lin,
+                           sw=m_sw, res=res))
     print("Servo loops on the simulated drive, servo_controller defaults; "
           "errors in um\n")
     print_table(['case', 'play', 'design', 'RMS', 'max', 'near rev.',
@@ -295,19 +304,27 @@ def main():
           f" (target <= 1 %)")
     if big:
         rb = [c['sw']['rms'] / c['lin']['rms'] for c in big]
+        pos = [c['sw']['rms'] / c['lin']['rms'] for c in big
+               if c['loop'] == 'position']
         print(f"large play (>= 100 um), {len(big)} drives: RMS ratio median "
-              f"{np.median(rb):.2f} (goal <= 0.75)")
-    if swept:
-        print(f"play-free linear design / best swept: median "
-              f"{np.median(swept):.2f}, worst {max(swept):.2f}, within 2 "
-              f"times on {sum(x <= 2 for x in swept)} of {len(swept)} "
-              f"(target <= 2)")
+              f"{np.median(rb):.2f}" + (f"; position loops ({len(pos)}): "
+                                        f"median {np.median(pos):.2f}, worst "
+                                        f"{max(pos):.2f}" if pos else "")
+              + " (goal <= 0.75 on position drives)")
+    for kind in ('all', 'position', 'speed'):
+        got = [x for loop, x in swept if kind in ('all', loop)]
+        if got and (kind == 'all' or len(got) < len(swept)):
+            print(f"play-free linear design / best swept"
+                  f"{'' if kind == 'all' else f', {kind} loops'}: median "
+                  f"{np.median(got):.2f}, worst {max(got):.2f}, within 2 "
+                  f"times on {sum(x <= 2 for x in got)} of {len(got)}"
+                  f"{' (target <= 2)' if kind == 'all' else ''}")
     if mism:
         print("\nOn drives that differ from the one identified (RMS um / "
               "hunt):\n")
         print_table(['case', 'play', 'drive', 'linear', 'hunt', 'sandwich',
-                     'hunt', 'RMS/lin'], mism)
-        ratio = [float(row[7]) for row in mism]
+                     'hunt', 'RMS/lin'], [row[:8] for row in mism])
+        ratio = [row[8] for row in mism]
         print(f"hunting (>= 3 reversals in a hold): linear "
               f"{sum(row[4] >= 3 for row in mism)}, sandwich "
               f"{sum(row[6] >= 3 for row in mism)} of {len(mism)}; "

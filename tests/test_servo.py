@@ -66,6 +66,25 @@ def test_pid_never_amplifies_the_reference(seed):
     assert np.max(np.abs(L / (1 + L))) <= 1 + 1e-9
 
 
+@pytest.mark.parametrize('peak', [1.15, 1.3])
+def test_a_looser_bound_on_t_is_held_and_lifts_the_integral_gain(
+        peak, monkeypatch):
+    # T_PEAK > 1 bounds |T| by a circle: held on the design grid, and the
+    # PID it allows has a larger ki than the |T| <= 1 design's (the bound
+    # of --peak-t in benchmarks/bench_servo.py)
+    base = sw.servo_controller(AXIS)
+    monkeypatch.setattr(sd, 'T_PEAK', peak)
+    ctrl = sw.servo_controller(AXIS)
+    w = sd.frequency_grid(AXIS.den[0][0])
+    L = sd.loop_gain(np.trim_zeros(AXIS.num[0][0], 'f'), AXIS.den[0][0],
+                     ctrl.pid, w)
+    T = np.abs(L / (1 + L))
+    assert np.max(T) <= peak + 1e-9
+    assert np.max(T) > 1.0
+    assert ctrl.ki > base.ki
+    assert ctrl.margins['modulus'] >= 0.6 * (1 - 1e-3)
+
+
 def test_tracking_controller_raises_instead_of_an_unstable_loop():
     with pytest.raises(ValueError, match="unstable loop"):
         sw.tracking_controller(AXIS, modulus_margin=0.8, approximate=True)
