@@ -38,14 +38,20 @@ CROSSOVER_MOST = 8.0
 RELIABLE = 0.1
 
 
+def _top(w, good):
+    """The highest of the band centres w up to which every band is
+    `good` (0 if the first is not)."""
+    bad = np.flatnonzero(~good)
+    return float(w[-1] if bad.size == 0 else
+                 (w[bad[0] - 1] if bad[0] else 0.0))
+
+
 def trusted_band(bands):
     """The highest frequency (rad/sample) up to which every band of the
     error bands (w, delta) has delta <= TRUSTED (0 if the first has
     not)."""
     w, delta = (np.asarray(a, float) for a in bands)
-    bad = np.nonzero(~(delta <= TRUSTED))[0]
-    return float(w[-1] if bad.size == 0 else
-                 (w[bad[0] - 1] if bad[0] else 0.0))
+    return _top(w, delta <= TRUSTED)
 
 
 def crossover_limit(bands, num, den):
@@ -81,8 +87,7 @@ def measured_response(base, rel):
     wk, dk, sk = (np.asarray(a) for a in rel)
     if wk.size == 0:                # a record of fewer than 64 samples
         return None
-    bad = np.flatnonzero(~(sk <= RELIABLE))
-    top = wk[-1] if bad.size == 0 else (wk[bad[0] - 1] if bad[0] else 0.0)
+    top = _top(wk, sk <= RELIABLE)
     if not top > wk[0]:
         return None
     num, den = tf_arrays(base)

@@ -135,6 +135,15 @@ def _roots(a, b, level):
         return (-B - sq) / (2 * A), (-B + sq) / (2 * A), C
 
 
+def _outside(a, b, level):
+    """Largest ki >= 0 up to which |a + ki b| >= level at every frequency
+    (rows designs, columns frequencies), grown from ki = 0 (inf where it
+    never binds), and whether ki = 0 meets it."""
+    r1, _, c = _roots(a, b, level)
+    lim = np.where(np.isfinite(r1) & (r1 > 0), r1, np.inf).min(axis=1)
+    return lim, np.all(c >= 0, axis=1)
+
+
 #: the bound on the complementary sensitivity, :math:`|T| \le` T_PEAK.
 #: It, not the modulus margin or the crossover limit, bounds the PIDs of
 #: the play-free position drives of benchmarks/bench_servo.py. At 1.15
@@ -154,9 +163,7 @@ def _no_peak(a, b):
     centre :math:`-M^2/(M^2 - 1)` and radius :math:`M/(M^2 - 1)`."""
     if T_PEAK > 1:
         m2 = T_PEAK ** 2
-        r1, _, c = _roots(a - 1 + m2 / (m2 - 1), b, T_PEAK / (m2 - 1))
-        lim = np.where(np.isfinite(r1) & (r1 > 0), r1, np.inf).min(axis=1)
-        return lim, np.all(c >= 0, axis=1)
+        return _outside(a - 1 + m2 / (m2 - 1), b, T_PEAK / (m2 - 1))
     c = np.real(a) - 0.5
     rb = np.real(b)
     with np.errstate(invalid='ignore', divide='ignore'):
@@ -169,10 +176,7 @@ def _ki_max(a, b, mm, high):
     at every frequency, and |L| <= 1 at the frequencies flagged `high`
     (rows of a = 1 + L(ki=0) are designs, columns frequencies;
     L = a - 1 + ki b); -1 where none."""
-    r1, r2, c = _roots(a, b, mm)
-    ok0 = np.all(c >= 0, axis=1)
-    bad = np.isfinite(r1) & (r1 > 0)
-    lim = np.where(bad, r1, np.inf).min(axis=1)
+    lim, ok0 = _outside(a, b, mm)
     lim_t, ok_t = _no_peak(a, b)
     lim, ok0 = np.minimum(lim, lim_t), ok0 & ok_t
     # crossover below the plant's bandwidth: r1 <= ki <= r2 up there

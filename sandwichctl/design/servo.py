@@ -554,7 +554,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     where = sdata.margin_words(data, response, mmeas, mmod, num, den)
     notes.append(f"{'PD' if ki == 0 else 'PID'} with the largest "
                  f"{'proportional' if ki == 0 else 'integral'} gain at "
-                 f"modulus margin {mm:g}{'' if ki == 0 else ' and |T| <= 1'}"
+                 f"modulus margin {mm:g}"
+                 f"{'' if ki == 0 else f' and |T| <= {sd.T_PEAK:g}'}"
                  f"{where}, crossover below {lim:.3g} plant bandwidths: "
                  f"{lim_why}")
     design = dict(model=model, dt=dt, kp=float(kp), ki=float(ki),
