@@ -192,14 +192,11 @@ def test_identify_keeps_the_error_bands_of_its_baseline():
     assert np.all(np.abs(rel) <= delta * (1 + 1e-9))
 
 
-def test_relative_error_measures_gain_and_phase_of_a_missing_lag(rng):
+def test_relative_error_measures_gain_and_phase_of_a_missing_lag(
+        lagged_fit):
     from sandwichctl.tools.residuals import relative_error
     # a first-order fit of a plant with a second, unmodelled lag
-    P = ct.tf([0.05], [1, -0.95], 1) * ct.tf([0.5], [1, -0.5], 1)
-    n = 4000
-    u = np.repeat(rng.standard_normal(n // 20), 20) + 0.3 * rng.standard_normal(n)
-    y = ct.forced_response(P, U=u).outputs + 1e-3 * rng.standard_normal(n)
-    lin = sw.identify_linear(u, y, nb=1, nf=1, nk=1, dt=1)
+    P, lin = lagged_fit
     w, rel, sigma = relative_error(lin.residuals, lin.yhat)
     z = np.exp(1j * w)
     true = (np.polyval(P.num[0][0], z) / np.polyval(P.den[0][0], z)
