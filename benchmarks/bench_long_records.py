@@ -26,7 +26,9 @@ private switch ``_long.LONG_RECORD``):
 Run: python benchmarks/bench_long_records.py [--seeds 3] [--repeat 3]
      [--old-repeat 1] [--random-seeds 0 1] [--n-random 100000]
      [--baseline-seeds 0 1 2 3 4 5 6 7] [--arx-repeat 3]
-(``--old-repeat 0``: the long-record path alone.)
+     [--serial-repeat 3]
+(``--old-repeat 0``: the long-record path alone; ``--serial-repeat``
+adds rows of the long-record path on one thread, `_long.WORKERS` = 1.)
 """
 
 import argparse
@@ -76,19 +78,24 @@ class Counter:
 
 
 @contextlib.contextmanager
-def path(long, threshold=None, arx=False):
+def path(long, threshold=None, arx=False, serial=False):
     """The long-record path (at `threshold`, default the library's) or
     the exhaustive search (``long=False``); with `arx`, the long-record
     path's baseline of all the samples from the ARX start (as before it
-    started from the leading samples' fit)."""
-    saved, carried = _long.LONG_RECORD, _long._carried_linear
+    started from the leading samples' fit); with `serial`, on one thread
+    (`_long.WORKERS` = 1)."""
+    saved, carried, workers = (_long.LONG_RECORD, _long._carried_linear,
+                               _long.WORKERS)
     _long.LONG_RECORD = (threshold or saved) if long else np.inf
     if arx:
         _long._carried_linear = lambda *args: None
+    if serial:
+        _long.WORKERS = 1
     try:
         yield
     finally:
         _long.LONG_RECORD, _long._carried_linear = saved, carried
+        _long.WORKERS = workers
 
 
 def identify(u, y, orders):
@@ -115,14 +122,16 @@ def measure(u, y, plant, repeat, **kw):
 def rows_of(label, u, y, plant, args, threshold=None):
     """Two table rows, new and old path, of one record."""
     out = []
-    for name, long, arx, repeat in (
-            ('long-record', True, False, args.repeat),
-            ('long, ARX baseline', True, True, args.arx_repeat),
-            ('exhaustive', False, False, args.old_repeat)):
+    for name, long, arx, serial, repeat in (
+            ('long-record', True, False, False, args.repeat),
+            ('long, one thread', True, False, True, args.serial_repeat),
+            ('long, ARX baseline', True, True, False, args.arx_repeat),
+            ('exhaustive', False, False, False, args.old_repeat)):
         if not repeat:
             continue
         t, full, lengths, res, err = measure(
-            u, y, plant, repeat, long=long, threshold=threshold, arx=arx)
+            u, y, plant, repeat, long=long, threshold=threshold, arx=arx,
+            serial=serial)
         taken = res.long_record is not None
         out.append([label, f'{u.size:,}', name, 'yes' if taken else 'no',
                     repeat, f'{t:.2f} s', full, f'{lengths:.1f}',
@@ -210,6 +219,9 @@ def main():
     ap.add_argument('--arx-repeat', type=int, default=0,
                     help="also run the long-record path with the baseline "
                     "of all the samples from the ARX start (before)")
+    ap.add_argument('--serial-repeat', type=int, default=0,
+                    help="also run the long-record path on one thread "
+                    "(_long.WORKERS = 1)")
     args = ap.parse_args()
     print(f"Long records; {os.cpu_count()} cores, load average "
           f"{os.getloadavg()[0]:.2f} at the start; medians of repeated runs "

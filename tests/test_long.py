@@ -82,15 +82,30 @@ def test_long_path_fits_as_the_exhaustive_search(both, record):
 
 def test_the_leading_samples_linear_fit_starts_that_of_all():
     from types import SimpleNamespace
-    F = np.polymul([1.0, -1.0], [1.0, -0.5, 0.06])
-    head = {'integrators': 1, 'B': np.array([0.4, 0.2]), 'F': F}
-    scaled = SimpleNamespace(su=2.0, sy=4.0)
-    b, free = _long._carried_linear(head, scaled, 1)
-    np.testing.assert_allclose(b, [0.2, 0.1])
-    np.testing.assert_allclose(free, [1.0, -0.5, 0.06], atol=1e-12)
-    # another integrator count (or none stored): the ARX start
-    assert _long._carried_linear(head, scaled, 0) is None
-    assert _long._carried_linear({'integrators': 1}, scaled, 1) is None
+    head = {'B': np.array([0.4, 0.2]), 'Ff': np.array([1.0, -0.5, 0.06])}
+    # B in the leading samples' units (u / 2, y / 1) is B / 2 in the
+    # user's, and B / 2 * 2 / 4 in those of all the samples (u / 2, y / 4)
+    b, free = _long._carried_linear(head, SimpleNamespace(su=2.0, sy=1.0),
+                                    SimpleNamespace(su=2.0, sy=4.0))
+    np.testing.assert_allclose(b, [0.1, 0.05])
+    np.testing.assert_array_equal(free, [1.0, -0.5, 0.06])
+
+
+def test_two_threads_give_the_one_threads_model(monkeypatch, record):
+    """Stage 2's baseline beside stage 1, the starts of step 6 and the
+    smoothed path's differences on threads: the same model and baseline
+    as on one thread, bit for bit."""
+    plant, u, y = record
+    monkeypatch.setattr(_long, 'LONG_RECORD', 3000)
+    monkeypatch.setattr(_long, 'LONG_HEAD', 2000)
+    out = {}
+    for workers in (1, 2):
+        monkeypatch.setattr(_long, 'WORKERS', workers)
+        out[workers] = sw.identify(u, y, **plant.orders)
+    assert out[1].long_record is not None
+    np.testing.assert_array_equal(out[2].theta, out[1].theta)
+    assert out[2].linear['cost'] == out[1].linear['cost']
+    assert out[2].message == out[1].message
 
 
 def test_long_path_with_experiments_offsets_and_initial_states(

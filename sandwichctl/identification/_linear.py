@@ -23,6 +23,8 @@ RADIUS = 1 - 1e-6        # free poles must satisfy |p| < RADIUS
 _START_RADIUS = 0.999     # reflected start poles are kept inside this
 _BOUNDARY = 1 - 1e-5      # a fit with a free pole beyond this is pinned
 _SM_ITER = 5              # Steiglitz-McBride iterations of the start
+_PROBE = 0.1              # where the acceleration's difference is taken
+_ACCELERATION = 0.75      # largest |a| / (2 |v|) of an accepted step
 
 
 def _segs(x):
@@ -284,8 +286,10 @@ class _OutputError:
         return _cost(self.centre(self.y - yhat), 0.0)
 
     def normal(self, b, fp, yhat):
-        return _normal(self.centre(_jacobian(b, fp, self.v, yhat, self.nk)),
-                       self.centre(self.y - yhat))
+        """(J'J / dd', J'r / d, d) at (b, fp), the centred Jacobian kept
+        in ``self.jac`` for the acceleration of `_damped`."""
+        self.jac = self.centre(_jacobian(b, fp, self.v, yhat, self.nk))
+        return _normal(self.jac, self.centre(self.y - yhat))
 
     def run(self, max_iter, tol, start=None):
         """Levenberg-Marquardt from `start` (B, F') where it fits, else
@@ -341,16 +345,22 @@ class _OutputError:
     def _damped(self, s, g, gn, mu):
         """The step of the smallest damping from `mu` up (tenfold) that
         keeps F' stable and lowers the cost: (the new iterate, mu), or
-        (None, mu) when mu passes 1e12."""
-        nb, theta, a, d = self.nb, s['theta'], s['a'], s['d']
+        (None, mu) when mu passes 1e12.
+
+        Each damped Gauss-Newton step v gets a geodesic acceleration
+        (Transtrum and Sethna, 2012): the second derivative of y_hat along
+        v, by a finite difference, corrects the step to v + a / 2. The
+        cost of a free pole that creeps towards z = 1 lies in a curved
+        valley, where plain steps are damped to crawl along it (random
+        plant 2 of `sw.data.random_case` on a million samples: 82
+        iterations, 40 with the acceleration). An acceleration larger than
+        `_ACCELERATION` times the step means the quadratic model does not
+        hold there, and the damping grows.
+        """
+        nb = self.nb
         while True:
-            try:
-                step = (gn if mu == 0 else
-                        np.linalg.solve(a + mu * np.eye(theta.size), g)) / d
-            except np.linalg.LinAlgError:
-                step = None
-            if step is not None:
-                trial = theta + step
+            trial = self._accelerated(s, g, gn, mu)
+            if trial is not None:
                 fp_t = np.concatenate([[1.0], trial[nb:]])
                 if max_root(fp_t) < RADIUS:
                     yhat_t = _simulate(trial[:nb], fp_t, self.v, self.nk)
@@ -361,6 +371,31 @@ class _OutputError:
             mu = max(10 * mu, 1e-6)
             if mu > 1e12:
                 return None, mu
+
+    def _accelerated(self, s, g, gn, mu):
+        """The step at damping mu with its geodesic acceleration, added to
+        theta (None if the system is singular or the acceleration too
+        large); the plain step where y_hat at the probe is not stable."""
+        nb, theta, d = self.nb, s['theta'], s['d']
+        a = s['a'] + mu * np.eye(theta.size)
+        try:
+            step = (gn if mu == 0 else np.linalg.solve(a, g)) / d
+        except np.linalg.LinAlgError:
+            return None
+        probe = theta + _PROBE * step
+        fp_p = np.concatenate([[1.0], probe[nb:]])
+        if not (np.all(np.isfinite(step)) and max_root(fp_p) < RADIUS):
+            return theta + step
+        y_p = _simulate(probe[:nb], fp_p, self.v, self.nk)
+        curv = self.centre(2 / _PROBE * ((y_p - s['yhat']) / _PROBE
+                                         - self.jac @ step))
+        rhs = -(self.jac.T @ curv) / d
+        with np.errstate(all='ignore'):
+            acc = np.linalg.lstsq(a, rhs, rcond=None)[0] / d
+        if not (np.linalg.norm(acc * d)
+                <= 2 * _ACCELERATION * np.linalg.norm(step * d)):
+            return None
+        return theta + step + 0.5 * acc
 
     def result(self, s):
         """The `fit_oe` dict of the run `s`: a free pole pinned at the

@@ -32,9 +32,12 @@ leading samples must excite the plant: when the input or output of an
 experiment is constant there, the whole record is searched as before.
 """
 
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 
-from ._search import Search, Task, _head, search, step1_units
+from ._search import (Search, Task, _head, search, step1_units,
+                      step2_linear_baseline)
 
 __all__ = []
 
@@ -48,6 +51,10 @@ LONG_RECORD = 200_000
 #: times the 2,000 it screens on by default, five times the longest record
 #: the search was tuned on.
 LONG_HEAD = 50_000
+#: Threads of the search on the leading samples (`_threads.ordered_map`):
+#: the starts of step 6 and the relocations of step 9 converge side by
+#: side, as do stage 2's linear baseline and stage 1.
+WORKERS = 2
 
 
 def is_long(task):
@@ -60,15 +67,31 @@ def long_search(task):
     baseline), as `_search.search` returns them, on all the samples."""
     head = Task(_head(task.u, LONG_HEAD), _head(task.y, LONG_HEAD),
                 task.orders, task.opt, dt=task.dt, name=task.name,
-                progress=task.progress, offsets=task.offsets)
+                progress=task.progress, offsets=task.offsets,
+                workers=WORKERS)
     if not all(np.ptp(part) > 0 for part in head.u + head.y):
         return search(task)       # a constant start: it cannot find a basin
-    prob_h, best_h, linear_h = search(head)
-    split = (prob_h.st.i1, prob_h.st.i2)
-    scaled = step1_units(task)
-    full = Search(task, task.fit_linear(
-        scaled, sum(split), start=_carried_linear(linear_h, scaled,
-                                                  sum(split))), split)
+    scaled_h, scaled = step1_units(head), step1_units(task)
+    linears_h = step2_linear_baseline(head, scaled_h)
+    starts = {k: _carried_linear(lin, scaled_h, scaled)
+              for k, lin in linears_h.items()}
+    # with WORKERS > 1, stage 2's linear baselines run beside stage 1
+    # (scipy's filters, BLAS and the numba kernels release the GIL): the
+    # same fits as one after the other, in about the time of the longer
+    pool = ThreadPoolExecutor(max_workers=1) if WORKERS > 1 else None
+    try:
+        early = {} if pool is None else {
+            k: pool.submit(task.fit_linear, scaled, k, start=start)
+            for k, start in starts.items()}
+        prob_h, best_h, linear_h = search(head, linears_h)
+        split = (prob_h.st.i1, prob_h.st.i2)
+        k = sum(split)
+        lin = early[k].result() if k in early else task.fit_linear(
+            scaled, k, start=starts.get(k))
+    finally:        # a fit with another integrator count is not waited for
+        if pool is not None:
+            pool.shutdown(wait=False, cancel_futures=True)
+    full = Search(task, lin, split)
     sign = best_h['sign']
     if sign not in full.probs:
         full.probs[sign] = task.problem(split, sign)
@@ -95,15 +118,11 @@ def long_search(task):
     return full.probs[best['sign']], best, linear
 
 
-def _carried_linear(linear_h, scaled, k):
-    """The leading samples' linear fit (`Search.baseline`'s, in the user's
-    units) as a `fit_oe` start (B, F') on all of them, scaled as
-    `scaled`; None if it has not k integrators."""
-    if linear_h.get('integrators') != k or 'B' not in linear_h:
-        return None
-    free = (np.polydiv(linear_h['F'], np.poly(np.ones(k)))[0] if k
-            else linear_h['F'])
-    return linear_h['B'] * scaled.su / scaled.sy, free
+def _carried_linear(lin_h, scaled_h, scaled):
+    """A `fit_oe` fit on the leading samples (scaled as `scaled_h`) as a
+    start (B, F') on all of them (scaled as `scaled`)."""
+    return (lin_h['B'] * scaled_h.sy / scaled_h.su * scaled.su / scaled.sy,
+            lin_h['Ff'])
 
 
 def _carried(prob_h, prob, phi_h):

@@ -55,7 +55,7 @@ def padding(o):
     return q1 + nb + q2 + nd + na + nc + 2
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def l1_output(theta, o, u, xs, t):
     """x_hat(t) of eq. (2.1) with stored past x_hat (xs) and input u."""
     na, nb, q1 = o[0], o[1], o[4]
@@ -103,7 +103,7 @@ def add_direct_partials(out, scale, zone, x, m1, m2, D1, D2, im):
     return 0.0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def window_predict(theta, o, u, ystar, xs, vs, zs, k, grad):
     """y_hat(k, theta) of the paper's recursive predictor; see module doc.
 
@@ -140,7 +140,7 @@ def window_predict(theta, o, u, ystar, xs, vs, zs, k, grad):
     return yhat, nonsmooth
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def store_state(theta, o, u, ystar_src, xs, vs, zs, ys, k, grad):
     """Store x_hat(k), v_hat(k), zone(k) and y_hat(k) for theta.
 
@@ -159,7 +159,7 @@ def store_state(theta, o, u, ystar_src, xs, vs, zs, ys, k, grad):
     return yhat
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def oe_steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1, past,
              parallel):
     """Samples k0..k1-1 of the output-error model with sensitivities.
@@ -241,7 +241,7 @@ def oe_steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1, past,
     return y
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def is_stable(theta, start, n, margin):
     """True if z^n + theta[start] z^(n-1) + ... has all roots inside
     |z| < 1 - margin (Schur-Cohn step-down test on the scaled polynomial).
@@ -268,7 +268,7 @@ def is_stable(theta, start, n, margin):
     return True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def stable_and_finite(theta, o):
     """Both denominators stable (|poles| < 0.999) and finite."""
     for r in range(theta.size):
@@ -278,13 +278,13 @@ def stable_and_finite(theta, o):
     return is_stable(theta, nc, na, 1e-3) and is_stable(theta, 0, nc, 1e-3)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def oe_simulate(theta, o, u, pad, xs, vs, zs, ys, Sx, Sv, Sy):
     """Run `oe_steps` over a whole padded record (fixed theta)."""
     oe_steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, pad, u.size, ys, True)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def sp_simulate(theta, o, u, ymeas, pad, xs, vs, zs, ys, Sx, Sv, Sy):
     """`oe_simulate` with L2's past outputs measured (series-parallel)."""
     oe_steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, pad, u.size, ymeas,
@@ -300,7 +300,7 @@ def _smoothed_step(x, x_prev, v_prev, m1, m2, D1, D2, eps):
     return w * rising + (1.0 - w) * falling
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _output_padded(theta, o, u, past, pad, xs, vs, ys, eps):
     """The recursion without derivatives; L2's past outputs are read from
     `past`: ys itself (output error) or the measured ones

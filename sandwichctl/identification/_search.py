@@ -31,6 +31,7 @@ from ._linear import fit_oe, fit_output, fit_blocks, wants_integrator
 from ._predictor import oe_signals
 from ._problem import Problem, STABILITY_MARGIN
 from ._smooth import smooth_refine
+from ._threads import ordered_map
 from ._starts import (splits, opened, random_start, recursive_start,
                       reintegrated, relocations, perturb, unsplit,
                       held_starts, holds)
@@ -57,11 +58,13 @@ UNINTEGRATED_POLE = 0.99
 DRIFT_FILTER_POLE = 0.95
 
 
-def search(task):
+def search(task, linears=None):
     """Steps 1 to 13 on `task` (a `Task`): the problem, the best `lm`
-    output and the linear baseline of the chosen integrator count."""
+    output and the linear baseline of the chosen integrator count
+    (`linears`: step 2's fits, when they are already made)."""
     scaled = step1_units(task)
-    linears = step2_linear_baseline(task, scaled)
+    if linears is None:
+        linears = step2_linear_baseline(task, scaled)
     return step13_held_out(task, *step3_integrators(task, linears))
 
 
@@ -75,6 +78,7 @@ class Task:
         self.dt, self.name = kw.get('dt', True), kw.get('name')
         self.progress = kw.get('progress', False)
         self.offsets = kw.get('offsets', False)
+        self.workers = kw.get('workers', 1)     # threads of `ordered_map`
         self.inits = opt.initial_state == 'estimate'
         o = orders
         self.shape = (o['nb'] + o['nd'] + 1, o['na'] + o['nc'],
@@ -96,7 +100,8 @@ class Task:
         model it gives goes through them on the outputs themselves)."""
         ys = [lfilter([1.0, -1.0], [1.0, -rho], part) for part in self.y]
         opt = dataclasses.replace(self.opt, relocate=0, hops=0)
-        return Task(self.u, ys, self.orders, opt, dt=self.dt)
+        return Task(self.u, ys, self.orders, opt, dt=self.dt,
+                    workers=self.workers)
 
     def fit_linear(self, scaled, k, start=None):
         """The linear output-error fit with k integrators on `scaled`
@@ -554,8 +559,9 @@ class Search:
             others, self.opt.screen_iter, tick=False),
             key=lambda out: out['cost'])
         best, finals = None, []
-        for out in screened[:keep]:
-            out = self.step7_refit_l2(self.converge(out['sign'], out['phi']))
+        for out in ordered_map(lambda out: self.step7_refit_l2(
+                self.converge(out['sign'], out['phi'])), screened[:keep],
+                self.task.workers):
             finals.append(out)
             if best is None or out['cost'] < best['cost']:
                 best = out
@@ -594,7 +600,8 @@ class Search:
         if self.opt.smooth:
             p = self.probs[best['sign']]
             out = smooth_refine(p.st, best['phi'], p.u, p.y,
-                                self.opt.max_iter, self.opt.tol)
+                                self.opt.max_iter, self.opt.tol,
+                                workers=self.task.workers)
             if out is not None and out['cost'] < best['cost']:
                 best = dict(out, sign=best['sign'])
         self.tick()
@@ -615,8 +622,9 @@ class Search:
         short = sorted((lm(st, phi, us, ys, opt.screen_iter // 2, opt.tol)
                         for phi in starts), key=lambda out: out['cost'])
         found = best
-        for out in short[:RELOCATE_KEEP]:
-            out = self.converge(best['sign'], out['phi'])
+        for out in ordered_map(lambda out: self.converge(
+                best['sign'], out['phi']), short[:RELOCATE_KEEP],
+                self.task.workers):
             if out['cost'] < found['cost'] * (1 - 1e-6):
                 found = out
         return found

@@ -21,6 +21,10 @@ difference Jacobian): they are only a way to a start, the exact
 refinement (`_lm.lm`) decides.
 """
 
+import contextlib
+import inspect
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 from scipy.optimize import least_squares
 
@@ -34,6 +38,7 @@ __all__ = []
 EPS_PATH = (0.3, 0.1, 0.03, 0.01, 0.003, 0.001)
 #: Function evaluations (not counting the Jacobian's) per smoothed problem.
 SMOOTH_NFEV = 20
+_TAKES_WORKERS = 'workers' in inspect.signature(least_squares).parameters
 
 
 def _step_spread(st, phi, u):
@@ -46,7 +51,18 @@ def _step_spread(st, phi, u):
     return s if np.isfinite(s) and s > 0 else 1.0
 
 
-def smooth_refine(st, phi, u, y, max_iter=200, tol=1e-10):
+@contextlib.contextmanager
+def _pool(workers):
+    """least_squares' keywords for `workers` threads: a thread pool's map
+    as ``workers`` where scipy takes it, else none."""
+    if workers <= 1 or not _TAKES_WORKERS:
+        yield {}
+        return
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        yield {'workers': pool.map}
+
+
+def smooth_refine(st, phi, u, y, max_iter=200, tol=1e-10, *, workers=1):
     """The continuation from phi, then `lm` on the exact cost.
 
     Parameters
@@ -58,6 +74,10 @@ def smooth_refine(st, phi, u, y, max_iter=200, tol=1e-10):
         are held).
     u, y : list of ndarray
         The scaled experiments.
+    workers : int
+        Threads for the finite differences of the smoothed problems'
+        Jacobians (the same evaluations, side by side; with scipy >= 1.16,
+        whose ``least_squares`` takes ``workers``).
 
     Returns
     -------
@@ -81,14 +101,16 @@ def smooth_refine(st, phi, u, y, max_iter=200, tol=1e-10):
         return r if np.all(np.isfinite(r)) else fallback
 
     p = np.maximum(phi[:free], lo + 1e-12)
-    for rel in EPS_PATH:
-        try:
-            fit = least_squares(residuals, p, bounds=(lo, np.inf),
-                                args=(rel * spread,), max_nfev=SMOOTH_NFEV,
-                                x_scale='jac')
-        except (ValueError, np.linalg.LinAlgError):
-            return None
-        p = fit.x
+    with _pool(workers) as kw:
+        for rel in EPS_PATH:
+            try:
+                fit = least_squares(residuals, p, bounds=(lo, np.inf),
+                                    args=(rel * spread,),
+                                    max_nfev=SMOOTH_NFEV, x_scale='jac',
+                                    **kw)
+            except (ValueError, np.linalg.LinAlgError):
+                return None
+            p = fit.x
     start = phi.copy()
     start[:free] = p
     start = st.clip(start, 1e-9)
