@@ -15,6 +15,12 @@ u -> L1 -> H -> L2 -> y with random stable first- or second-order blocks
   beta = gamma), integrated exactly over each step of x, so that z
   saturates smoothly at +-z_max, z_max 0.2 to 0.8 std(x).
 
+std(x) is that of the first record the actuator runs (the estimation
+record and its continuation), then fixed, so that the new record below
+comes from the same actuator (until 2026-11-26 each record scaled the
+operator by its own std(x): the new record of seed 20 came from an
+actuator with widths 0.54 times those of the estimation record).
+
 The input is one of the four kinds of `sw.data.excitation`, 2 N samples
 of it, and the output has 1 % noise. ``sw.identify`` with the blocks'
 true orders and ``sw.identify_linear`` of the same total orders are
@@ -50,9 +56,9 @@ from _timing import print_table                            # noqa: E402
 SNR = 1e4
 
 
-def prandtl_ishlinskii(x, rng):
-    """A linear term plus ten play operators of growing width."""
-    sx = np.std(x)
+def prandtl_ishlinskii(x, rng, sx):
+    """A linear term plus ten play operators of growing width (scaled by
+    `sx`)."""
     widths = np.linspace(0.1, 1.0, 10) * rng.uniform(0.2, 0.6) * sx
     weights = np.exp(-rng.uniform(0.1, 0.4) * np.arange(10))
     h = rng.uniform(0.2, 1.0) * x
@@ -61,10 +67,11 @@ def prandtl_ishlinskii(x, rng):
     return h
 
 
-def bouc_wen(x, rng):
-    """a x + (1 - a) z, z a smoothly saturating hysteretic state."""
+def bouc_wen(x, rng, sx):
+    """a x + (1 - a) z, z a smoothly saturating hysteretic state (its
+    saturation scaled by `sx`)."""
     a = rng.uniform(0.2, 0.6)
-    z_max = rng.uniform(0.2, 0.8) * np.std(x)
+    z_max = rng.uniform(0.2, 0.8) * sx
     z = np.zeros_like(x)
     for k in range(1, x.size):
         step = x[k] - x[k - 1]
@@ -95,10 +102,15 @@ def case(seed, n):
     kind = sw.data.KINDS[int(rng.integers(len(sw.data.KINDS)))]
     op = (prandtl_ishlinskii, bouc_wen)[seed % 2]
     op_seed = int(rng.integers(2 ** 31))
+    scale = {}
 
     def plant(u):
         x = lfilter(np.r_[0.0, b], a, u)               # q1 = 1
-        h = op(x, np.random.default_rng(op_seed))
+        # the operator's widths are set by the first record it runs on
+        # (estimation and continuation), then fixed: a new record comes
+        # from the same actuator
+        sx = scale.setdefault('sx', float(np.std(x)))
+        h = op(x, np.random.default_rng(op_seed), sx)
         return lfilter(d, c, h)                        # q2 = 0
     orders = dict(na=na, nb=nb, nc=nc, nd=nd, q1=1, q2=0)
     return orders, plant, kind, op.__name__
