@@ -2,6 +2,7 @@
 step-wise servo drive."""
 
 import pickle
+import sys
 import warnings
 
 import numpy as np
@@ -205,6 +206,28 @@ def test_any_plant_with_a_step_method_gives_the_same_loop():
         u.append(ctrl.step(ahead[k], y))
         y = plant.step(u[-1])
     np.testing.assert_allclose(u, fast.outputs[1], atol=1e-10)
+
+
+class FailingPlant(StepPlant):
+    """A hardware loop whose drive trips at its fifth step."""
+
+    def step(self, u):
+        self.count = getattr(self, 'count', 0) + 1
+        if self.count == 5:
+            raise RuntimeError("drive tripped")
+        return super().step(u)
+
+
+@pytest.mark.skipif(sys.version_info < (3, 11), reason="add_note is 3.11")
+def test_a_plants_own_error_goes_on_and_says_where_the_loop_was():
+    P = ct.tf([0.5, 0.2], [1, -1.1, 0.3], 1)
+    ctrl = sw.servo_controller(P)
+    with pytest.raises(RuntimeError, match="drive tripped") as info:
+        sw.closed_loop_response(FailingPlant(P), sw.steps_and_sines(100),
+                                ctrl)
+    note, = info.value.__notes__
+    assert note.startswith("raised by plant.step(u) at sample 5 of "
+                           "closed_loop_response (u = ")
 
 
 def test_sandwich_design_tracks_the_model_and_crosses_the_play():

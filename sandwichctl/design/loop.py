@@ -8,7 +8,9 @@
   sample and returns the next measurement y(k + 1) (a simulator of your
   own, a hardware-in-the-loop rig, ``sandwichctl.data.ServoDrive``): a
   Python loop. The first measurement is ``plant.read()`` where the plant
-  has one, else 0 (at rest).
+  has one, else 0 (at rest). An exception the plant's methods raise goes
+  on as it is, with a note of the method, the sample and u (Python >=
+  3.11).
 
 `closed_loop_response` (module `closedloop`) calls it for a
 `ServoController`.
@@ -104,9 +106,9 @@ def servo_loop(plant, r, ctrl):
                          np.arange(n))
         return y, u
     if hasattr(plant, 'reset'):
-        plant.reset()
-    yk = (_measured(plant.read(), 'read()', 0) if hasattr(plant, 'read')
-          else 0.0)
+        _call(plant.reset, 'reset()', 0)
+    yk = (_measured(_call(plant.read, 'read()', 0), 'read()', 0)
+          if hasattr(plant, 'read') else 0.0)
     for k in range(n):
         if not math.isfinite(yk):
             raise ValueError(
@@ -115,8 +117,22 @@ def servo_loop(plant, r, ctrl):
         uk = servo_step(ctrl._p, ctrl._ix, ctrl._s, r_ahead[k], yk)
         y[k], u[k] = yk, uk
         if k + 1 < n:
-            yk = _measured(plant.step(uk), 'step(u)', k + 1)
+            yk = _measured(_call(plant.step, 'step(u)', k + 1, uk),
+                           'step(u)', k + 1)
     return y, u
+
+
+def _call(method, call, k, *args):
+    """A user plant's `method`(*args) for sample k; an exception it raises
+    goes on, noting where the loop was (Python >= 3.11)."""
+    try:
+        return method(*args)
+    except Exception as exc:
+        if hasattr(exc, 'add_note'):
+            exc.add_note(f"raised by plant.{call} at sample {k} of "
+                         f"closed_loop_response"
+                         + (f" (u = {args[0]!r})" if args else ""))
+        raise
 
 
 def _measured(value, call, k):
