@@ -98,6 +98,7 @@ def test_two_threads_give_the_one_threads_model(monkeypatch, record):
     plant, u, y = record
     monkeypatch.setattr(_long, 'LONG_RECORD', 3000)
     monkeypatch.setattr(_long, 'LONG_HEAD', 2000)
+    monkeypatch.delenv('OMP_NUM_THREADS', raising=False)
     out = {}
     for workers in (1, 2):
         monkeypatch.setattr(_long, 'WORKERS', workers)
@@ -106,6 +107,56 @@ def test_two_threads_give_the_one_threads_model(monkeypatch, record):
     np.testing.assert_array_equal(out[2].theta, out[1].theta)
     assert out[2].linear['cost'] == out[1].linear['cost']
     assert out[2].message == out[1].message
+
+
+def test_a_set_stop_ends_the_linear_fit_before_its_next_iteration():
+    import threading
+    from sandwichctl.identification._linear import fit_oe
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(2000)
+    y = np.convolve(u, [0.0, 0.5, 0.3])[:2000] + 0.01 * rng.standard_normal(
+        2000)
+    stop = threading.Event()
+    stop.set()
+    out = fit_oe(u, y, (2, 2, 1), 0, stop=stop)
+    assert out['nit'] == 0 and not out['converged']
+    assert out['message'] == "stopped: the fit is no longer wanted"
+    assert fit_oe(u, y, (2, 2, 1), 0)['converged']
+
+
+def test_one_thread_where_the_process_is_limited_to_one(monkeypatch):
+    monkeypatch.setenv('OMP_NUM_THREADS', '1')     # identify_many's workers
+    assert _long.threads() == 1
+    monkeypatch.delenv('OMP_NUM_THREADS')
+    assert _long.threads() == _long.WORKERS == 2
+
+
+def test_an_error_in_stage_1_stops_the_baseline_beside_it(monkeypatch,
+                                                         record):
+    import threading
+    plant, u, y = record
+    monkeypatch.setattr(_long, 'LONG_RECORD', 3000)
+    monkeypatch.setattr(_long, 'LONG_HEAD', 2000)
+    monkeypatch.delenv('OMP_NUM_THREADS', raising=False)
+    seen, original = {}, _long.Task.fit_linear
+
+    def fit_linear(self, scaled, k, start=None, stop=None):
+        if stop is None:                # step 2 on the leading samples
+            return original(self, scaled, k, start)
+        seen['stop'] = stop             # the baseline beside stage 1
+        stop.wait(timeout=30)
+        return {}
+
+    def failing_search(task, linears=None):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(_long.Task, 'fit_linear', fit_linear)
+    monkeypatch.setattr(_long, 'search', failing_search)
+    before = threading.active_count()
+    with pytest.raises(KeyboardInterrupt):
+        sw.identify(u, y, **plant.orders)
+    assert seen['stop'].is_set()
+    assert threading.active_count() == before   # no fit left running
 
 
 def test_long_path_with_experiments_offsets_and_initial_states(

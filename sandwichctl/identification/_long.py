@@ -32,6 +32,8 @@ leading samples must excite the plant: when the input or output of an
 experiment is constant there, the whole record is searched as before.
 """
 
+import os
+import threading
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -51,10 +53,19 @@ LONG_RECORD = 200_000
 #: times the 2,000 it screens on by default, five times the longest record
 #: the search was tuned on.
 LONG_HEAD = 50_000
-#: Threads of the search on the leading samples (`_threads.ordered_map`):
-#: the starts of step 6 and the relocations of step 9 converge side by
-#: side, as do stage 2's linear baseline and stage 1.
+#: Threads of the long-record path: stage 2's linear baseline beside
+#: stage 1, and in stage 1 the starts of step 6, the relocations of step
+#: 9 and the finite differences of step 8 side by side
+#: (`_threads.ordered_map`); so up to three busy threads at a time. One in
+#: a process limited to one thread (`threads`).
 WORKERS = 2
+
+
+def threads():
+    """`WORKERS`, or 1 in a process whose ``OMP_NUM_THREADS`` is 1: the
+    workers of `identify_many`, and dask workers started by a nanny, are
+    single-threaded, one identification per core."""
+    return 1 if os.environ.get('OMP_NUM_THREADS') == '1' else WORKERS
 
 
 def is_long(task):
@@ -65,32 +76,39 @@ def is_long(task):
 def long_search(task):
     """Stages 1 and 2 on `task`: (problem, best `lm` output, linear
     baseline), as `_search.search` returns them, on all the samples."""
+    workers = threads()
     head = Task(_head(task.u, LONG_HEAD), _head(task.y, LONG_HEAD),
                 task.orders, task.opt, dt=task.dt, name=task.name,
                 progress=task.progress, offsets=task.offsets,
-                workers=WORKERS)
+                workers=workers)
     if not all(np.ptp(part) > 0 for part in head.u + head.y):
         return search(task)       # a constant start: it cannot find a basin
     scaled_h, scaled = step1_units(head), step1_units(task)
     linears_h = step2_linear_baseline(head, scaled_h)
     starts = {k: _carried_linear(lin, scaled_h, scaled)
               for k, lin in linears_h.items()}
-    # with WORKERS > 1, stage 2's linear baselines run beside stage 1
-    # (scipy's filters, BLAS and the numba kernels release the GIL): the
-    # same fits as one after the other, in about the time of the longer
-    pool = ThreadPoolExecutor(max_workers=1) if WORKERS > 1 else None
+    # stage 2's linear baseline runs beside stage 1 where it is the only
+    # one (with integrators='auto' and two, stage 1 chooses first): the
+    # same fit as after it, in about the time of the longer
+    early, stop = None, threading.Event()
+    pool = (ThreadPoolExecutor(max_workers=1)
+            if workers > 1 and len(starts) == 1 else None)
     try:
-        early = {} if pool is None else {
-            k: pool.submit(task.fit_linear, scaled, k, start=start)
-            for k, start in starts.items()}
-        prob_h, best_h, linear_h = search(head, linears_h)
-        split = (prob_h.st.i1, prob_h.st.i2)
-        k = sum(split)
-        lin = early[k].result() if k in early else task.fit_linear(
-            scaled, k, start=starts.get(k))
-    finally:        # a fit with another integrator count is not waited for
         if pool is not None:
-            pool.shutdown(wait=False, cancel_futures=True)
+            (k, start), = starts.items()
+            early = (k, pool.submit(task.fit_linear, scaled, k, start=start,
+                                    stop=stop))
+        prob_h, best_h, linear_h = search(head, linears_h)
+    except BaseException:
+        stop.set()              # the fit ends at its next iteration
+        raise
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True)
+    split = (prob_h.st.i1, prob_h.st.i2)
+    k = sum(split)
+    lin = (early[1].result() if early is not None and early[0] == k
+           else task.fit_linear(scaled, k, start=starts.get(k)))
     full = Search(task, lin, split)
     sign = best_h['sign']
     if sign not in full.probs:

@@ -103,12 +103,12 @@ class Task:
         return Task(self.u, ys, self.orders, opt, dt=self.dt,
                     workers=self.workers)
 
-    def fit_linear(self, scaled, k, start=None):
+    def fit_linear(self, scaled, k, start=None, stop=None):
         """The linear output-error fit with k integrators on `scaled`
-        (from `start`, `fit_oe`'s, if given)."""
+        (from `start` and with `stop`, `fit_oe`'s, if given)."""
         return fit_oe(scaled.u, scaled.y, self.shape, k,
                       max_iter=self.opt.max_iter, tol=self.opt.tol,
-                      offsets=self.offsets, start=start)
+                      offsets=self.offsets, start=start, stop=stop)
 
 
 def integrator_split(k, orders, block):
