@@ -140,9 +140,9 @@ def test_an_error_in_stage_1_stops_the_baseline_beside_it(monkeypatch,
     monkeypatch.delenv('OMP_NUM_THREADS', raising=False)
     seen, original = {}, _long.Task.fit_linear
 
-    def fit_linear(self, scaled, k, start=None, stop=None):
+    def fit_linear(self, scaled, k, start=None, stop=None, **kw):
         if stop is None:                # step 2 on the leading samples
-            return original(self, scaled, k, start)
+            return original(self, scaled, k, start, **kw)
         seen['stop'] = stop             # the baseline beside stage 1
         stop.wait(timeout=30)
         return {}

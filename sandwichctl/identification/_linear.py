@@ -230,7 +230,7 @@ def _start(v, y, nb, m, nk, offsets=False):
 
 
 def fit_oe(u, y, shape, integrators, *, max_iter=100, tol=1e-10,
-           offsets=False, start=None, stop=None):
+           offsets=False, start=None, stop=None, accelerate=False):
     """Output-error fit on already scaled arrays (no checks, no scaling).
 
     Parameters
@@ -258,6 +258,10 @@ def fit_oe(u, y, shape, integrators, *, max_iter=100, tol=1e-10,
         Checked before each iteration: once set, the run stops there (not
         converged), for a fit on a thread whose result is no longer
         wanted.
+    accelerate : bool
+        Geodesically accelerated steps (`_OutputError._damped`): the fit
+        of a long record's samples, where a pole that creeps towards
+        z = 1 costs most iterations. Off, the steps are the plain ones.
 
     Returns
     -------
@@ -268,7 +272,7 @@ def fit_oe(u, y, shape, integrators, *, max_iter=100, tol=1e-10,
         included), ``offsets`` (one per experiment, zeros unless fitted),
         ``nit``, ``converged`` and ``message``.
     """
-    problem = _OutputError(u, y, shape, integrators, offsets)
+    problem = _OutputError(u, y, shape, integrators, offsets, accelerate)
     return problem.result(problem.run(max_iter, tol, start, stop))
 
 
@@ -276,8 +280,9 @@ class _OutputError:
     """The linear output-error cost of one `fit_oe` call and its
     Levenberg-Marquardt run."""
 
-    def __init__(self, u, y, shape, integrators, offsets):
+    def __init__(self, u, y, shape, integrators, offsets, accelerate=False):
         self.nb, nf, self.nk = shape
+        self.accelerate, self.jac = accelerate, None
         self.m = nf - integrators
         self.integrators, self.offsets = integrators, offsets
         v = _segs(u)
@@ -296,8 +301,10 @@ class _OutputError:
         """(J'J / dd', J'r / d, d) at (b, fp), the centred Jacobian kept
         in ``self.jac`` for the acceleration of `_damped`."""
         self.jac = None                     # one N x p matrix at a time
-        self.jac = self.centre(_jacobian(b, fp, self.v, yhat, self.nk))
-        return _normal(self.jac, self.centre(self.y - yhat))
+        jac = self.centre(_jacobian(b, fp, self.v, yhat, self.nk))
+        if self.accelerate:
+            self.jac = jac
+        return _normal(jac, self.centre(self.y - yhat))
 
     def run(self, max_iter, tol, start=None, stop=None):
         """Levenberg-Marquardt from `start` (B, F') where it fits, else
@@ -358,7 +365,8 @@ class _OutputError:
         keeps F' stable and lowers the cost: (the new iterate, mu), or
         (None, mu) when mu passes 1e12.
 
-        Each damped Gauss-Newton step v gets a geodesic acceleration
+        With ``accelerate``, each damped Gauss-Newton step v gets a
+        geodesic acceleration
         (Transtrum and Sethna, 2012): the second derivative of y_hat along
         v, by a finite difference, corrects the step to v + a / 2. The
         cost of a free pole that creeps towards z = 1 lies in a curved
@@ -395,6 +403,8 @@ class _OutputError:
             step = (gn if mu == 0 else np.linalg.solve(a, g)) / d
         except np.linalg.LinAlgError:
             return []
+        if not self.accelerate:
+            return [theta + step]
         probe = theta + _PROBE * step
         fp_p = np.concatenate([[1.0], probe[nb:]])
         if not (np.all(np.isfinite(step)) and max_root(fp_p) < RADIUS):

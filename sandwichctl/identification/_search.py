@@ -103,12 +103,12 @@ class Task:
         return Task(self.u, ys, self.orders, opt, dt=self.dt,
                     workers=self.workers)
 
-    def fit_linear(self, scaled, k, start=None, stop=None):
+    def fit_linear(self, scaled, k, start=None, **kw):
         """The linear output-error fit with k integrators on `scaled`
-        (from `start` and with `stop`, `fit_oe`'s, if given)."""
+        (from `start`, and with `fit_oe`'s `stop` and `accelerate`)."""
         return fit_oe(scaled.u, scaled.y, self.shape, k,
                       max_iter=self.opt.max_iter, tol=self.opt.tol,
-                      offsets=self.offsets, start=start, stop=stop)
+                      offsets=self.offsets, start=start, **kw)
 
 
 def integrator_split(k, orders, block):
