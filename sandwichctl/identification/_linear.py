@@ -23,11 +23,6 @@ RADIUS = 1 - 1e-6        # free poles must satisfy |p| < RADIUS
 _START_RADIUS = 0.999     # reflected start poles are kept inside this
 _BOUNDARY = 1 - 1e-5      # a fit with a free pole beyond this is pinned
 _SM_ITER = 5              # Steiglitz-McBride iterations of the start
-_PROBE = 0.1              # where the acceleration's difference is taken
-#: Largest |a| / |v| of an accelerated step. Transtrum and Sethna bound it
-#: at 0.75; on random_case(2)'s million samples that took 69 iterations
-#: (40 at 1.5), and every step must lower the cost anyway.
-_ACCELERATION = 1.5
 
 
 def _segs(x):
@@ -230,7 +225,7 @@ def _start(v, y, nb, m, nk, offsets=False):
 
 
 def fit_oe(u, y, shape, integrators, *, max_iter=100, tol=1e-10,
-           offsets=False, start=None, stop=None, accelerate=False):
+           offsets=False, start=None, stop=None):
     """Output-error fit on already scaled arrays (no checks, no scaling).
 
     Parameters
@@ -258,10 +253,6 @@ def fit_oe(u, y, shape, integrators, *, max_iter=100, tol=1e-10,
         Checked before each iteration: once set, the run stops there (not
         converged), for a fit on a thread whose result is no longer
         wanted.
-    accelerate : bool
-        Geodesically accelerated steps (`_OutputError._damped`): the fit
-        of a long record's samples, where a pole that creeps towards
-        z = 1 costs most iterations. Off, the steps are the plain ones.
 
     Returns
     -------
@@ -272,7 +263,7 @@ def fit_oe(u, y, shape, integrators, *, max_iter=100, tol=1e-10,
         included), ``offsets`` (one per experiment, zeros unless fitted),
         ``nit``, ``converged`` and ``message``.
     """
-    problem = _OutputError(u, y, shape, integrators, offsets, accelerate)
+    problem = _OutputError(u, y, shape, integrators, offsets)
     return problem.result(problem.run(max_iter, tol, start, stop))
 
 
@@ -280,9 +271,8 @@ class _OutputError:
     """The linear output-error cost of one `fit_oe` call and its
     Levenberg-Marquardt run."""
 
-    def __init__(self, u, y, shape, integrators, offsets, accelerate=False):
+    def __init__(self, u, y, shape, integrators, offsets):
         self.nb, nf, self.nk = shape
-        self.accelerate, self.jac = accelerate, None
         self.m = nf - integrators
         self.integrators, self.offsets = integrators, offsets
         v = _segs(u)
@@ -298,13 +288,8 @@ class _OutputError:
         return _cost(self.centre(self.y - yhat), 0.0)
 
     def normal(self, b, fp, yhat):
-        """(J'J / dd', J'r / d, d) at (b, fp), the centred Jacobian kept
-        in ``self.jac`` for the acceleration of `_damped`."""
-        self.jac = None                     # one N x p matrix at a time
-        jac = self.centre(_jacobian(b, fp, self.v, yhat, self.nk))
-        if self.accelerate:
-            self.jac = jac
-        return _normal(jac, self.centre(self.y - yhat))
+        return _normal(self.centre(_jacobian(b, fp, self.v, yhat, self.nk)),
+                       self.centre(self.y - yhat))
 
     def run(self, max_iter, tol, start=None, stop=None):
         """Levenberg-Marquardt from `start` (B, F') where it fits, else
@@ -363,24 +348,16 @@ class _OutputError:
     def _damped(self, s, g, gn, mu):
         """The step of the smallest damping from `mu` up (tenfold) that
         keeps F' stable and lowers the cost: (the new iterate, mu), or
-        (None, mu) when mu passes 1e12.
-
-        With ``accelerate``, each damped Gauss-Newton step v gets a
-        geodesic acceleration
-        (Transtrum and Sethna, 2012): the second derivative of y_hat along
-        v, by a finite difference, corrects the step to v + a / 2. The
-        cost of a free pole that creeps towards z = 1 lies in a curved
-        valley, where plain steps are damped to crawl along it (random
-        plant 2 of `sw.data.random_case` on a million samples: 76
-        iterations from the leading samples' fit, 40 with the
-        acceleration). Where the acceleration is larger than
-        `_ACCELERATION` times the step (the quadratic model does not hold
-        there), or the accelerated step does not lower the cost, the plain
-        step at the same damping is tried before the damping grows.
-        """
-        nb = self.nb
+        (None, mu) when mu passes 1e12."""
+        nb, theta, a, d = self.nb, s['theta'], s['a'], s['d']
         while True:
-            for trial in self._trials(s, g, gn, mu):
+            try:
+                step = (gn if mu == 0 else
+                        np.linalg.solve(a + mu * np.eye(theta.size), g)) / d
+            except np.linalg.LinAlgError:
+                step = None
+            if step is not None:
+                trial = theta + step
                 fp_t = np.concatenate([[1.0], trial[nb:]])
                 if max_root(fp_t) < RADIUS:
                     yhat_t = _simulate(trial[:nb], fp_t, self.v, self.nk)
@@ -391,34 +368,6 @@ class _OutputError:
             mu = max(10 * mu, 1e-6)
             if mu > 1e12:
                 return None, mu
-
-    def _trials(self, s, g, gn, mu):
-        """The steps to try at damping mu, added to theta: with its
-        geodesic acceleration (where y_hat at the probe is stable and the
-        acceleration small enough), then the plain step; none if the
-        system is singular."""
-        nb, theta, d = self.nb, s['theta'], s['d']
-        a = s['a'] + mu * np.eye(theta.size)
-        try:
-            step = (gn if mu == 0 else np.linalg.solve(a, g)) / d
-        except np.linalg.LinAlgError:
-            return []
-        if not self.accelerate:
-            return [theta + step]
-        probe = theta + _PROBE * step
-        fp_p = np.concatenate([[1.0], probe[nb:]])
-        if not (np.all(np.isfinite(step)) and max_root(fp_p) < RADIUS):
-            return [theta + step]
-        y_p = _simulate(probe[:nb], fp_p, self.v, self.nk)
-        curv = self.centre(2 / _PROBE * ((y_p - s['yhat']) / _PROBE
-                                         - self.jac @ step))
-        rhs = -(self.jac.T @ curv) / d
-        with np.errstate(all='ignore'):
-            acc = np.linalg.lstsq(a, rhs, rcond=None)[0] / d
-        if not (np.linalg.norm(acc * d)
-                <= _ACCELERATION * np.linalg.norm(step * d)):
-            return [theta + step]
-        return [theta + step + 0.5 * acc, theta + step]
 
     def result(self, s):
         """The `fit_oe` dict of the run `s`: a free pole pinned at the

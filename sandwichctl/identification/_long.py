@@ -97,7 +97,7 @@ def long_search(task):
         if pool is not None:
             (k, start), = starts.items()
             early = (k, pool.submit(task.fit_linear, scaled, k, start=start,
-                                    stop=stop, accelerate=True))
+                                    stop=stop))
         prob_h, best_h, linear_h = search(head, linears_h)
     except BaseException:
         stop.set()              # the fit ends at its next iteration
@@ -108,8 +108,7 @@ def long_search(task):
     split = (prob_h.st.i1, prob_h.st.i2)
     k = sum(split)
     lin = (early[1].result() if early is not None and early[0] == k
-           else task.fit_linear(scaled, k, start=starts.get(k),
-                                accelerate=True))
+           else task.fit_linear(scaled, k, start=starts.get(k)))
     full = Search(task, lin, split)
     sign = best_h['sign']
     if sign not in full.probs:

@@ -105,7 +105,7 @@ class Task:
 
     def fit_linear(self, scaled, k, start=None, **kw):
         """The linear output-error fit with k integrators on `scaled`
-        (from `start`, and with `fit_oe`'s `stop` and `accelerate`)."""
+        (from `start`, and with `fit_oe`'s `stop`)."""
         return fit_oe(scaled.u, scaled.y, self.shape, k,
                       max_iter=self.opt.max_iter, tol=self.opt.tol,
                       offsets=self.offsets, start=start, **kw)

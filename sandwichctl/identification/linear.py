@@ -24,9 +24,7 @@ Method
    ``scipy.signal.lfilter`` (d yhat / d b_j = q^-(nk+j-1) / F' v,
    d yhat / d f_i = -q^-i / F' yhat). A step is accepted only if it
    lowers the cost and keeps max abs(root(F')) < 1 - 1e-6; otherwise the
-   damping grows. (The sandwich search's fit of all the samples of a long
-   record adds a geodesic acceleration to each step, which keeps the steps
-   long where a pole creeps towards z = 1 along a curved valley.)
+   damping grows.
 
 The core on already scaled arrays is ``_linear.fit_oe``; the sandwich
 pipeline reuses it.
