@@ -32,6 +32,10 @@ reach, the worst shows what a larger fixed default would risk. With
 ``--to-margin`` it scales the linear design's gains up until the model's
 modulus margin is met with equality (when the crossover limit, not the
 margin, is what bounds them) and runs that on the drive too. With
+``--scales 1.25,1.5,2`` it runs the linear design with its gains scaled
+by each factor on the drive and on the drives of ``--mismatch`` too, and
+``--no-raise`` keeps every PID at |T| <= 1 (no gains raised where the
+data vouch for the model; `RAISE_MOST`), to compare. With
 ``--sources``, where the default feedforward inverts the sandwich's own
 linear part mbar L1 L2, it also runs the sandwich design with
 ``feedforward_from='model'`` and ``'baseline'`` (the linear baseline
@@ -48,7 +52,8 @@ bounds the PID's complementary sensitivity at M instead of 1
 Run: python benchmarks/bench_servo.py [--seeds 2] [--random 8] [--sweep]
      [--seed0 2 --random0 8] [--feedforward zpetc] [--bands]
      [--to-margin] [--sources] [--mismatch] [--crossover 2]
-     [--fixed-crossover] [--peak-t 1.15]
+     [--fixed-crossover] [--peak-t 1.15] [--scales 1.25,1.5,2]
+     [--no-raise]
 """
 
 import argparse
@@ -188,6 +193,14 @@ def main():
                     help="the bound on |T| of the PID's design (T_PEAK of "
                     "sandwichctl.design._servo_design, 1 by default), to "
                     "compare")
+    ap.add_argument('--scales', default=None,
+                    help="comma-separated factors: also run the linear "
+                    "design with its gains scaled by each (feedback_scale) "
+                    "on the drive and on the drives of MISMATCH")
+    ap.add_argument('--no-raise', action='store_true',
+                    help="no PID raised past |T| <= 1 where the data vouch "
+                    "for the model (RAISE_MOST of sandwichctl.design."
+                    "_servo_design set to 1), to compare with the default")
     ap.add_argument('--fixed-crossover', action='store_true',
                     help="hold the PID's crossover limit at "
                     "CROSSOVER_LIMIT['pid'] (no extension from the "
@@ -199,8 +212,12 @@ def main():
         sd.T_PEAK = args.peak_t
     if args.fixed_crossover:
         sdata.CROSSOVER_MOST = sd.CROSSOVER_LIMIT['pid']
+    if args.no_raise:
+        sd.RAISE_MOST = 1.0
+    scales = ([float(f) for f in args.scales.split(',')] if args.scales
+              else [])
     rows, checks, bands, margin, sources, swept = [], [], [], [], [], []
-    mism = []
+    mism, scaled_rows = [], []
     start = time.perf_counter()
     for label, loop, play, dt, params, seed in cases(
             args.seeds, args.random, args.loops.split(','), args.seed0,
@@ -279,6 +296,21 @@ def main():
                              f"{b['rms'] * 1e6:.1f}", b['hunting'],
                              f"{b['rms'] / a['rms']:.2f}",
                              b['rms'] / a['rms']])
+        if scales:
+            row = [label, f"{play * 1e6:.0f}",
+                   'yes' if 'raised together' in c_lin.notes[0] else 'no']
+            for f in scales:
+                try:
+                    c_f = sw.servo_controller(lin, feedback_scale=f)
+                except ValueError:
+                    row.append('refused')
+                    continue
+                got = [run(c_f, r, loop, play, dt, params, seed + 500)] + [
+                    run(c_f, r, loop, p_play, dt, p_params, seed + 500)
+                    for _, p_play, p_params in mismatched(play, params)]
+                row.append(f"{got[0]['rms'] * 1e6:.2f} / {got[0]['hunting']}"
+                           f" / {max(m['hunting'] for m in got[1:])}")
+            scaled_rows.append(row)
         checks.append(dict(label=label, loop=loop, play=play, lin=m_lin,
                            sw=m_sw, res=res))
     print("Servo loops on the simulated drive, servo_controller defaults; "
@@ -340,6 +372,12 @@ def main():
               "baseline's, points):\n")
         print_table(['case', 'play', 'gap', 'RMS model', 'RMS baseline',
                      'near rev. model', 'near rev. baseline'], sources)
+    if scaled_rows:
+        print("\nThe linear design with its gains scaled (RMS um / hunt on "
+              "the drive / most hunt on the drives of MISMATCH); raised: "
+              "whether the default design was raised past |T| <= 1\n")
+        print_table(['case', 'play', 'raised', *(f"x{f:g}" for f in scales)],
+                    scaled_rows)
     if margin:
         print("\nLinear design scaled up to its modulus margin (RMS um / "
               "hunt):\n")

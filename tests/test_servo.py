@@ -346,6 +346,33 @@ def test_a_play_free_position_pid_uses_the_room_its_data_leave():
     assert 2.2 < _crossover_ratio(fixed) <= 3.0
 
 
+@pytest.mark.parametrize('play', [0.0, 200e-6])
+def test_a_pid_is_raised_only_where_the_data_vouch_for_the_model(
+        play, monkeypatch):
+    # play-free, the residuals vouch for the model up to 8 bandwidths: the
+    # three gains go up together (ki / kp kept), the margin held on the
+    # measured response and half of it on the model; with 200 um they do
+    # not vouch, and nothing is raised
+    case = sw.data.drive_case(0, 'position', play, n=3000)
+    lin = sw.identify_linear(case.u, case.y, nb=3, nf=4, nk=1, dt=case.dt)
+    ctrl = sw.servo_controller(lin)
+    monkeypatch.setattr(sd, 'RAISE_MOST', 1.0)
+    plain = sw.servo_controller(lin)
+    raised = 'raised together' in ctrl.notes[0]
+    assert raised == (play == 0.0)
+    assert not any('raised' in n for n in plain.notes)
+    if not raised:
+        assert (ctrl.kp, ctrl.ki, ctrl.kd) == (plain.kp, plain.ki, plain.kd)
+        return
+    f = ctrl.kp / plain.kp
+    assert 1.05 < f <= 2.0
+    assert np.allclose([ctrl.ki, ctrl.kd], [f * plain.ki, f * plain.kd])
+    assert ctrl.margins['modulus_measured'] >= 0.6 * (1 - 1e-3)
+    assert ctrl.margins['modulus'] >= sd.MODEL_FLOOR * 0.6 * (1 - 1e-3)
+    assert ctrl.margins['pole_radius'] < 1
+    assert _crossover_ratio(ctrl) <= sdata.CROSSOVER_MOST * 1.01
+
+
 def test_the_margin_is_held_on_the_response_the_data_measured(lagged_fit):
     # a first-order fit of a plant with a second lag: the model alone
     # overstates the margin, the data correct it

@@ -17,6 +17,7 @@ it, by frequency band (`tools.residuals.error_bands`,
 import numpy as np
 import control as ct
 
+from . import _servo_design as sd
 from ._servo_design import (CROSSOVER_LIMIT, bandwidth, constraint_columns,
                             frequency_grid, loop_gain, tf_arrays)
 from ..tools.residuals import band_errors
@@ -184,3 +185,23 @@ def margin_words(data, response, mmeas, mmod, num, den):
              f"the model only below {CROSSOVER_MOST:g} plant bandwidths")
             + f" (got {mmeas:.3f}; {mmod:.3f} on the model alone, on a log "
             f"grid from {grid[0]:.1e} rad/sample)")
+
+
+def raised_words(num, den, C, ki, data, scale):
+    """The design note's words on a PID raised past |T| <= T_PEAK where
+    the data vouch for the model (`_servo_design.RAISE_MOST`), or ''."""
+    if ki == 0 or data is None or not data[1]:
+        return ''
+    w = frequency_grid(den)
+    one = np.ones(1)
+    wc, P = constraint_columns(w, np.polyval(num, np.exp(1j * w))
+                               / np.polyval(den, np.exp(1j * w)), data)
+    L = P * loop_gain(one, one, C, wc)
+    peak = float(np.max(np.abs(L / (1 + L))))
+    if peak <= sd.T_PEAK * (1 + 1e-6) or scale != 1:
+        return ''
+    return (f"; then its three gains raised together as far as that "
+            f"margin and the crossover limit allow (at most "
+            f"{sd.RAISE_MOST:g} times), where the residuals vouch for the "
+            f"model up to {CROSSOVER_MOST:g} plant bandwidths: |T| "
+            f"peaks at {peak:.3g}")

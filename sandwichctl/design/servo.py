@@ -64,6 +64,7 @@ import control as ct
 
 from . import _servo_design as sd
 from . import _servo_data as sdata
+from . import _servo_band as sb
 from ._servo_kernel import (pack, servo_step, servo_run, adapt_index,
                             NSCALAR)
 from .loop import servo_loop, ss_arrays
@@ -357,7 +358,10 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     :math:`\bar m L_1 L_2`), with the largest integral gain that keeps the
     modulus margin and a complementary sensitivity :math:`|T| \le 1` on a
     log frequency grid reaching below the slowest pole (an integrating
-    plant gets a PD, see the module notes); the loop's poles are checked,
+    plant gets a PD, see the module notes). Where a result's residuals
+    vouch for the model up to eight plant bandwidths (little play), the
+    PID's gains are then raised together as far as the margin allows
+    (``ctrl.notes`` says so). The loop's poles are checked,
     so an unstable design is never returned. The feedforward inverts the
     model along the reference with ``preview`` samples of preview; for a
     sandwich it contains the backlash inverse (see the module notes).
@@ -557,7 +561,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                  f"modulus margin {mm:g}"
                  f"{'' if ki == 0 else f' and |T| <= {sd.T_PEAK:g}'}"
                  f"{where}, crossover below {lim:.3g} plant bandwidths: "
-                 f"{lim_why}")
+                 f"{lim_why}{sdata.raised_words(num, den, C, ki, data, scale)}")
     design = dict(model=model, dt=dt, kp=float(kp), ki=float(ki),
                   kd=float(kd), derivative_pole=float(pole),
                   pid=ct.tf(C.num[0][0], C.den[0][0], dt,
@@ -598,7 +602,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     if comp:
         # a model without data (known, or built by hand) is inverted
         # exactly along the reference; an identified one gets the band
-        # offset through the DC gains (see sd.static_inverse)
+        # offset through the DC gains (see sb.static_inverse)
         exact = result is None
         L2n, L2d = sd.tf_arrays(model.L2)
         if exact:
@@ -608,14 +612,14 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                                                max_preview)
             preview, fn, fd = 0, np.zeros(1), np.ones(1)
         else:
-            n2, d2, p2 = sd.static_inverse(L2n, L2d)
+            n2, d2, p2 = sb.static_inverse(L2n, L2d)
             if np.any(np.abs(model.L1.zeros()) >= 1):
                 # a non-minimum-phase L1 first moves the wrong way: its DC
                 # gain alone would send the offset astray
                 n1, d1, p1, _ = sd.preview_inverse(L1n, L1d, feedforward,
                                                    max_preview)
             else:
-                n1, d1, p1 = sd.static_inverse(L1n, L1d)
+                n1, d1, p1 = sb.static_inverse(L1n, L1d)
         default = (BAND_FRACTION_INTEGRATING if integrating else
                    BAND_FRACTION_MODEL if ff_model else BAND_FRACTION)
         band_fraction_out = (
@@ -628,7 +632,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         smoothing_out = (SMOOTHING * mbar * band_x if smoothing is None
                          else check_nonnegative('smoothing', smoothing))
         if jump_samples is None:
-            jump = sd.jump_samples(L1n, L1d, band_x, dt)
+            jump = sb.jump_samples(L1n, L1d, band_x, dt)
             if integrating:
                 # L1^-1 turns the jump into a speed pulse: no faster than
                 # the loop follows, or a load that coasts overshoots
