@@ -24,7 +24,8 @@ ticks at the motor's torque limit. With ``--sweep`` it also scales the
 linear feedback on the play-free drive to find the best linear design of
 the sweep (the default's gains by 0.25, 0.5, 2 and 4, and those of the
 design at the fixed crossover limit of a model without data by 1, 2 and
-4; a scale whose loop is unstable on the model is skipped). With
+4, each designed with and without the raise past |T| <= 1 of
+`RAISE_MOST`; a scale whose loop is unstable on the model is skipped). With
 ``--bands`` it runs the sandwich design of every drive at fixed band
 shares too, and prints the RMS ratio to the linear design at
 each: the best share per drive bounds what adapting the share online could
@@ -239,13 +240,21 @@ def main():
             # the default's gains scaled, and those of the design at the
             # fixed crossover limit (whose larger scales the default's
             # model refuses)
-            for f, kw in [(f, {}) for f in (0.25, 0.5, 2.0, 4.0)] + [
-                    (f, dict(crossover_limit=sd.CROSSOVER_LIMIT['pid']))
-                    for f in (1.0, 2.0, 4.0)]:
+            # (f, kw, RAISE_MOST): each with and without the raise, so
+            # that the sweep does not depend on the default's raise
+            most = sd.RAISE_MOST
+            for f, kw, raise_most in [
+                    (f, kw, m) for m in sorted({most, 1.0}) for f, kw in
+                    [(f, {}) for f in (0.25, 0.5, 2.0, 4.0)]
+                    + [(f, dict(crossover_limit=sd.CROSSOVER_LIMIT['pid']))
+                       for f in (1.0, 2.0, 4.0)]]:
+                sd.RAISE_MOST = raise_most
                 try:
                     scaled = sw.servo_controller(lin, feedback_scale=f, **kw)
                 except ValueError:      # unstable on the model: not swept
                     continue
+                finally:
+                    sd.RAISE_MOST = most
                 sweep.append(run(scaled, r, loop, 0.0, dt, params,
                                  seed + 500)['rms'])
             best = f"{min(sweep) * 1e6:.1f}"

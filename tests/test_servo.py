@@ -147,7 +147,7 @@ def test_two_models_of_one_record_get_alike_pd_gains():
         response = sdata.measured_response(base, rel)
         num, den = _twin(fit if plant is None else plant)
         gains.append(sd.design_pid(num, den, base.dt, 0.6, None,
-                                   (response[0], False)))
+                                   (response[0], False, 0.0)))
     (kp1, ki1, kd1, p1), (kp2, ki2, kd2, p2) = gains
     assert ki1 == ki2 == 0 and p1 == p2
     assert kd1 > 0 and kd2 > 0

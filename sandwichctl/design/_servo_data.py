@@ -131,9 +131,11 @@ def result_errors(result):
 
 
 def data_plant(measured, bands, num, den):
-    """`design_pid`'s `measured` for the plant num/den: (response, alone),
-    with response `measured_response`'s callable and alone whether the
-    margins are read on it alone (else on it and the model both); None
+    """`design_pid`'s `measured` for the plant num/den: (response, alone,
+    trusted), with response `measured_response`'s callable, alone whether
+    the margins are read on it alone (else on it and the model both) and
+    trusted how far the residuals vouch for the model, in plant
+    bandwidths (`trusted_band`); None
     without a measured response, or one that turns the design plant's
     phase by 90 deg or more where it starts (the plant is then not the
     baseline the data measured, and does not move the output the same
@@ -153,9 +155,9 @@ def data_plant(measured, bands, num, den):
                                 / np.polyval(num, z)) > 0:
         return None
     wb = bandwidth(num, den, w)
-    alone = bands is not None and len(bands[0]) > 0 and \
-        trusted_band(bands) >= CROSSOVER_MOST * wb
-    return measured[0], bool(alone)
+    trusted = (trusted_band(bands) / wb if bands is not None
+               and len(bands[0]) > 0 else 0.0)
+    return measured[0], bool(trusted >= CROSSOVER_MOST), trusted
 
 
 def measured_arrays(data, den):
@@ -200,8 +202,9 @@ def raised_words(num, den, C, ki, data, scale):
     peak = float(np.max(np.abs(L / (1 + L))))
     if peak <= sd.T_PEAK * (1 + 1e-6) or scale != 1:
         return ''
+    lim = min(max(data[2], CROSSOVER_MOST), sd.RAISE_CROSSOVER)
     return (f"; then its three gains raised together as far as that "
-            f"margin and the crossover limit allow (at most "
-            f"{sd.RAISE_MOST:g} times), where the residuals vouch for the "
-            f"model up to {CROSSOVER_MOST:g} plant bandwidths: |T| "
-            f"peaks at {peak:.3g}")
+            f"margin allows, crossing over below {lim:.3g} plant "
+            f"bandwidths (at most {sd.RAISE_MOST:g} times; the residuals "
+            f"vouch for the model beyond {CROSSOVER_MOST:g}): |T| peaks at "
+            f"{peak:.3g}")

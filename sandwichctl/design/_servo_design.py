@@ -238,12 +238,20 @@ REFINE = 8
 REFINE_STARTS = 6
 STEP_BELOW = 1.5
 
+#: a raised PID may cross over up to where the residuals vouch for the
+#: model (`_servo_data.trusted_band`), at most RAISE_CROSSOVER plant
+#: bandwidths. Raising the design's own limit instead (CROSSOVER_MOST 8 ->
+#: 16) let the largest-ki design trade kp for ki (kp 3585 -> 2275 on the
+#: play-free position drive of seed 1 of benchmarks/bench_servo.py, 1.12
+#: -> 1.72 um); raising the three gains together keeps their ratio
+RAISE_CROSSOVER = 16.0
 #: where the residuals of the data vouch for the model up to
 #: `_servo_data.CROSSOVER_MOST` plant bandwidths (the margins are then read
 #: on the measured response alone), a PID found under |T| <= `T_PEAK` is
 #: raised, its three gains together, by the largest factor up to
 #: RAISE_MOST whose loop still meets the modulus margin where the design
-#: reads it, the crossover limit, and stability (unconditional). |T| <= 1
+#: reads it, crosses over below `RAISE_CROSSOVER`'s limit, and is stable
+#: (unconditionally). |T| <= 1
 #: stands in for the model's error, which the data have then measured. On
 #: the play-free position drives of benchmarks/bench_servo.py the factor
 #: found is about 1.25 (RMS 1.37 -> 1.13 um, seed 0) with no hunting,
@@ -258,7 +266,7 @@ RAISE_MOST = 2.0
 #: to the first that fails
 RAISE_STEPS = 16
 #: the raised loop keeps at least this share of the modulus margin on the
-#: model alone, and its crossover limit there too: a record of 3,000
+#: model alone, and the same crossover limit there too: a record of 3,000
 #: samples of the play-free drive measured a response that let the loop
 #: cross over at 8.8 bandwidths of its model, at a margin of 0.22 there
 MODEL_FLOOR = 0.5
@@ -334,8 +342,11 @@ def design_pid(num, den, dt, modulus_margin, limit=None, measured=None):
     cross = np.nonzero(phase <= phase[0] - np.pi)[0]
     k0 = min(1.0 / np.abs(P[cross[0] if cross.size else -1]),
              1.0 / np.abs(P[np.searchsorted(w, wb)]))
-    # the frequencies (columns) the constraints are read at
-    model = (P, w > limit * wb)
+    # the frequencies (columns) the constraints are read at; a raised PID
+    # (`_raised`) may cross over up to where the data vouch for the model
+    most = (limit if measured is None else
+            float(np.clip(measured[2], limit, RAISE_CROSSOVER)))
+    model = (P, w > most * wb)
     wc, P = constraint_columns(w, P, measured, sign)
     zc = np.exp(1j * wc)
     high = wc > limit * wb
@@ -412,7 +423,7 @@ def design_pid(num, den, dt, modulus_margin, limit=None, measured=None):
                 best = refined
     if best is not None and not integrating and measured is not None \
             and measured[1]:
-        best = _raised(best, num, den, dt, (zc, P, high), model,
+        best = _raised(best, num, den, dt, (zc, P, wc > most * wb), model,
                        modulus_margin, w)
     if best is not None:
         kp, ki, kd, pole = best
