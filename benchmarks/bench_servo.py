@@ -205,7 +205,8 @@ def main():
     ap.add_argument('--fixed-crossover', action='store_true',
                     help="hold the PID's crossover limit at "
                     "CROSSOVER_LIMIT['pid'] (no extension from the "
-                    "residuals of the data), to compare with the default")
+                    "residuals of the data, and no PID raised past it), "
+                    "to compare with the default")
     args = ap.parse_args()
     if args.crossover is not None:
         sd.CROSSOVER_LIMIT['pid'] = args.crossover
@@ -213,6 +214,7 @@ def main():
         sd.T_PEAK = args.peak_t
     if args.fixed_crossover:
         sdata.CROSSOVER_MOST = sd.CROSSOVER_LIMIT['pid']
+        sd.RAISE_MOST = 1.0             # nor a raised PID past it
     if args.no_raise:
         sd.RAISE_MOST = 1.0
     scales = ([float(f) for f in args.scales.split(',')] if args.scales

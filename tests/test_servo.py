@@ -329,9 +329,9 @@ def test_a_play_free_position_pid_uses_the_room_its_data_leave():
     case = sw.data.drive_case(0, 'position', 0.0, n=3000)
     lin = sw.identify_linear(case.u, case.y, nb=3, nf=4, nk=1, dt=case.dt)
     ctrl = sw.servo_controller(lin)
-    assert ctrl.crossover_limit == sdata.CROSSOVER_MOST
+    assert sdata.CROSSOVER_MOST <= ctrl.crossover_limit <= sd.RAISE_CROSSOVER
     assert 'residuals' in ctrl.notes[0]
-    assert 3.0 < _crossover_ratio(ctrl) <= sdata.CROSSOVER_MOST
+    assert 3.0 < _crossover_ratio(ctrl) <= ctrl.crossover_limit
     # held on the response the record measured (0.69; 0.67 on the drive's
     # own, from 200,000 samples; 0.41 on this short record's model alone)
     assert ctrl.margins['modulus_measured'] >= 0.6 * (1 - 1e-3)
@@ -370,7 +370,14 @@ def test_a_pid_is_raised_only_where_the_data_vouch_for_the_model(
     assert ctrl.margins['modulus_measured'] >= 0.6 * (1 - 1e-3)
     assert ctrl.margins['modulus'] >= sd.MODEL_FLOOR * 0.6 * (1 - 1e-3)
     assert ctrl.margins['pole_radius'] < 1
-    assert _crossover_ratio(ctrl) <= sdata.CROSSOVER_MOST * 1.01
+    assert sdata.CROSSOVER_MOST <= ctrl.crossover_limit <= sd.RAISE_CROSSOVER
+    assert _crossover_ratio(ctrl) <= ctrl.crossover_limit * 1.01
+    assert f"raised together {f:.3g} times" in ctrl.notes[0]
+    # a crossover limit asked for holds the raised loop too
+    for asked in (2.0, 3.0):
+        held = sw.servo_controller(lin, crossover_limit=asked)
+        assert held.crossover_limit == asked
+        assert _crossover_ratio(held) <= asked * 1.01
 
 
 def test_the_margin_is_held_on_the_response_the_data_measured(lagged_fit):

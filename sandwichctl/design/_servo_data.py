@@ -189,22 +189,17 @@ def margin_words(data, response, mmeas, mmod, num, den):
             f"grid from {grid[0]:.1e} rad/sample)")
 
 
-def raised_words(num, den, C, ki, data, scale):
+def raised_words(num, den, C, info):
     """The design note's words on a PID raised past |T| <= T_PEAK where
-    the data vouch for the model (`_servo_design.RAISE_MOST`), or ''."""
-    if ki == 0 or data is None or not data[1]:
+    the data vouch for the model (`_servo_design.RAISE_MOST`; `info` as
+    `design_pid` filled it), or ''."""
+    if 'raised' not in info:
         return ''
     w = frequency_grid(den)
-    one = np.ones(1)
-    wc, P = constraint_columns(w, np.polyval(num, np.exp(1j * w))
-                               / np.polyval(den, np.exp(1j * w)), data)
-    L = P * loop_gain(one, one, C, wc)
-    peak = float(np.max(np.abs(L / (1 + L))))
-    if peak <= sd.T_PEAK * (1 + 1e-6) or scale != 1:
-        return ''
-    lim = min(max(data[2], CROSSOVER_MOST), sd.RAISE_CROSSOVER)
-    return (f"; then its three gains raised together as far as that "
-            f"margin allows, crossing over below {lim:.3g} plant "
-            f"bandwidths (at most {sd.RAISE_MOST:g} times; the residuals "
-            f"vouch for the model beyond {CROSSOVER_MOST:g}): |T| peaks at "
-            f"{peak:.3g}")
+    L = loop_gain(num, den, C, w)
+    return (f"; then its three gains raised together {info['raised']:.3g} "
+            f"times (at most {sd.RAISE_MOST:g}) as far as that margin "
+            f"allows, crossing over below {info['limit']:.3g} plant "
+            f"bandwidths, where the residuals vouch for the model: |T| "
+            f"peaks at {float(np.max(np.abs(L / (1 + L)))):.4g} on the "
+            f"model")

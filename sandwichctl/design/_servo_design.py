@@ -251,19 +251,15 @@ RAISE_CROSSOVER = 16.0
 #: raised, its three gains together, by the largest factor up to
 #: RAISE_MOST whose loop still meets the modulus margin where the design
 #: reads it, crosses over below `RAISE_CROSSOVER`'s limit, and is stable
-#: (unconditionally). |T| <= 1
-#: stands in for the model's error, which the data have then measured. On
-#: the play-free position drives of benchmarks/bench_servo.py the factor
-#: found is about 1.25 (RMS 1.37 -> 1.13 um, seed 0) with no hunting,
-#: on those drives, with 12 um of play or on the drives that differ from
-#: the one identified. Raising ki alone (T_PEAK 1.1 to 1.3) made the 12 um
-#: drives hunt (3 to 5 reversals in a hold): the ratio ki / kp, not the
-#: loop's speed, is what hunts. The residuals of a drive with 200 um never
-#: vouch so far (1.5 to 2.6 plant bandwidths), and there the same factor
-#: hunted on a heavier load
+#: (unconditionally). |T| <= 1 stands in for the model's error, which the
+#: data have then measured. On the play-free position drives of
+#: benchmarks/bench_servo.py the factor is about 1.25 (1.37 -> 1.13 um,
+#: seed 0). Raising ki alone (T_PEAK 1.1 to 1.3) made the 12 um drives
+#: hunt: ki / kp, not the loop's speed, is what hunts. The residuals of a
+#: drive with 200 um vouch only to 1.5 to 2.6 plant bandwidths, and there
+#: the same factor hunted on a heavier load (bench_servo.py --scales)
 RAISE_MOST = 2.0
-#: factors tried, RAISE_STEPS + 1 from 1 to RAISE_MOST on a log scale, up
-#: to the first that fails
+#: factors tried: RAISE_STEPS on a log scale up to RAISE_MOST, to a failure
 RAISE_STEPS = 16
 #: the raised loop keeps at least this share of the modulus margin on the
 #: model alone, and the same crossover limit there too: a record of 3,000
@@ -309,7 +305,8 @@ def constraint_columns(w, P, measured, sign=1.0):
     return np.r_[w, w[have]], np.r_[P, G[have]]
 
 
-def design_pid(num, den, dt, modulus_margin, limit=None, measured=None):
+def design_pid(num, den, dt, modulus_margin, limit=None, measured=None,
+               info=None):
     """PID gains (kp, ki, kd, pole) for the plant num/den (descending
     powers of z, at most one pole at z = 1): the largest ki under the
     modulus margin and with :math:`|T| \\le 1` (no frequency of the
@@ -322,10 +319,14 @@ def design_pid(num, den, dt, modulus_margin, limit=None, measured=None):
     turns into a limit cycle). An integrating plant gets
     the PD with the largest kp instead: a type-2 loop around play has no
     rest point and hunts. With `measured` (`_servo_data.data_plant`'s
-    (response, alone)), the margin, |T| and the crossover limit are read
-    on the response the data measured wherever it has data, on the model
-    elsewhere, and unless alone on the model too; the loop must be
-    stable on the model."""
+    (response, alone, trusted)), the margin, |T| and the crossover limit
+    are read on the response the data measured wherever it has data, on
+    the model elsewhere, and unless alone on the model too; the loop must
+    be stable on the model. Where alone, a PID is then raised
+    (`_raised`), crossing over below trusted plant bandwidths (at most
+    `RAISE_CROSSOVER`, at least `limit`); a trusted of 0 holds it below
+    `limit`. A dict `info` gets the factor ('raised') and that crossover
+    limit ('limit')."""
     w = frequency_grid(den)
     z = np.exp(1j * w)
     # a plant with a negative low-frequency gain gets negative gains
@@ -345,7 +346,7 @@ def design_pid(num, den, dt, modulus_margin, limit=None, measured=None):
     # the frequencies (columns) the constraints are read at; a raised PID
     # (`_raised`) may cross over up to where the data vouch for the model
     most = (limit if measured is None else
-            float(np.clip(measured[2], limit, RAISE_CROSSOVER)))
+            max(limit, min(measured[2], RAISE_CROSSOVER)))
     model = (P, w > most * wb)
     wc, P = constraint_columns(w, P, measured, sign)
     zc = np.exp(1j * wc)
@@ -423,8 +424,11 @@ def design_pid(num, den, dt, modulus_margin, limit=None, measured=None):
                 best = refined
     if best is not None and not integrating and measured is not None \
             and measured[1]:
-        best = _raised(best, num, den, dt, (zc, P, wc > most * wb), model,
-                       modulus_margin, w)
+        raised = _raised(best, num, den, dt, (zc, P, wc > most * wb),
+                         model, modulus_margin, w)
+        if info is not None and raised[0] != best[0]:
+            info.update(raised=raised[0] / best[0], limit=most)
+        best = raised
     if best is not None:
         kp, ki, kd, pole = best
         return sign * kp, sign * ki, sign * kd, pole
@@ -663,7 +667,7 @@ def tf_arrays(sys):
 
 def linear_part(model, result, lin_model, feedback_from, feedforward_from,
                 integrating, zeros, max_preview, mm, check_plant,
-                limit=None, measured=None):
+                limit=None, measured=None, info=None):
     """The linear part of a sandwich's design: (P, pid, ff_model, note,
     baseline). P is the plant the feedback is designed on and pid its
     gains where they were designed already (else None; `zeros` are L1
@@ -671,7 +675,8 @@ def linear_part(model, result, lin_model, feedback_from, feedforward_from,
     the feedforward inverts the sandwich's mbar L1 L2 (else the
     baseline); note why; baseline the linear baseline where the design
     uses it (else None). `limit`: `design_pid`'s, a callable of the
-    plant's (num, den), or None; `measured` likewise.
+    plant's (num, den), or None; `measured` likewise; `info` is passed
+    on to `design_pid`.
 
     The baseline (`lin_model`, a result's linear fit) carries the play's
     effect on the loop, so by default the feedback is designed on it;
@@ -714,7 +719,7 @@ def linear_part(model, result, lin_model, feedback_from, feedforward_from,
             pid = design_pid(num, den, lin_model.dt, mm,
                              limit(num, den) if callable(limit) else limit,
                              measured(num, den) if callable(measured)
-                             else measured)
+                             else measured, info)
         except ValueError as exc:
             if 'baseline' in (feedback_from, feedforward_from):
                 raise ValueError(f"the result's linear baseline, asked for "

@@ -185,8 +185,7 @@ class ServoController(ct.NonlinearIOSystem):
         The linear plant the feedback is designed and checked for (the
         model, or :math:`\bar m L_1 L_2` for a sandwich).
     crossover_limit : float
-        The loop gain is below 1 above this many plant bandwidths (see
-        `servo_controller`).
+        The loop gain is below 1 above this many plant bandwidths.
     margins : dict
         'modulus' (:math:`\min |1 + CP|` on a log grid below the slowest pole),
         'gain', 'phase' (deg) and 'pole_radius' of the designed loop on
@@ -348,8 +347,8 @@ def _rebuild(design, name, state, operating_point):
 def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                      max_preview=20, band_fraction=None, smoothing=None,
                      jump_samples=None, feedback_scale=1.0,
-                     crossover_limit=None,
-                     feedforward_from='auto', feedback_from='auto',
+                     crossover_limit=None, feedforward_from='auto',
+                     feedback_from='auto',
                      adapt=None,
                      operating_point=(0.0, 0.0), name=None):
     r"""Design a servo controller from an identified or known model.
@@ -359,9 +358,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     modulus margin and a complementary sensitivity :math:`|T| \le 1` on a
     log frequency grid reaching below the slowest pole (an integrating
     plant gets a PD, see the module notes). Where a result's residuals
-    vouch for the model up to eight plant bandwidths (little play), the
-    PID's gains are then raised together as far as the margin allows
-    (``ctrl.notes`` says so). The loop's poles are checked,
+    vouch for the model past eight plant bandwidths (little play), the
+    PID's gains are raised together as far as the margin allows, crossing
+    over below where they vouch (``ctrl.notes``). The poles are checked,
     so an unstable design is never returned. The feedforward inverts the
     model along the reference with ``preview`` samples of preview; for a
     sandwich it contains the backlash inverse (see the module notes).
@@ -449,11 +448,11 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     crossover_limit : float, optional
         The loop gain must be below 1 above this many plant bandwidths
         (the plant's -3 dB frequency), in [0.1, 1000]. By default 3 for
-        a PID and 1 for the PD of an integrating plant; for a PID
-        designed from an identification result, up to 8 where the
-        residuals of its data put the model's relative error below 0.5
-        in every band up to there (`error_bands` of
-        ``sandwichctl.tools.residuals``; much play keeps it at 3).
+        a PID and 1 for the PD of an integrating plant; for a PID from
+        an identification result, up to 8 where the residuals of its data
+        put the model's relative error below 0.5 in every band up to there
+        (`error_bands` of ``sandwichctl.tools.residuals``; much play keeps
+        it at 3), and up to 16 for a PID then raised. Given, it holds.
     operating_point : (float, float), optional
         (u0, y0): raw units of u and y at the model's zero.
     name : str, optional
@@ -506,17 +505,17 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         return (sdata.crossover_limit(bands, num, den) if crossover_limit
                 is None else (crossover_limit, 'as asked'))
 
-    def measured(num, den):
-        return sdata.data_plant(response, bands, num, den)
-    max_preview = check_int('max_preview', max_preview, minimum=0,
-                            maximum=MAX_ORDER)
+    def measured(num, den):         # a limit asked for holds a raised PID
+        data = sdata.data_plant(response, bands, num, den)
+        return data if crossover_limit is None or not data else data[:2] + (0,)
+    max_preview = check_int('max_preview', max_preview, 0, MAX_ORDER)
     name = check_name('name', name)
     if (not isinstance(operating_point, (tuple, list))
             or len(operating_point) != 2):
         raise ValueError(f"operating_point must be a pair (u0, y0); got "
                          f"{operating_point!r}")
     u0, y0 = (check_finite('operating_point', v) for v in operating_point)
-    notes = []
+    notes, info = [], {}
     model = sd.cancel_drift(model, notes)
     if isinstance(model, SandwichSystem):
         co = model.coefficients
@@ -531,7 +530,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         P, pid, ff_model, linear_note, lin_model = sd.linear_part(
             model, result, lin_model, feedback_from, feedforward_from,
             integrating, ff_zeros, max_preview, mm, _check_plant_tf,
-            lambda n, d: limit(n, d)[0], measured)
+            lambda n, d: limit(n, d)[0], measured, info)
     else:
         P, linear_note, pid = model, None, None
     num, den = _check_plant_tf('model' if P is model else 'the design plant',
@@ -541,7 +540,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     lim, lim_why = limit(num, den)
     data = measured(num, den)
     kp, ki, kd, pole = pid if pid is not None else sd.design_pid(
-        num, den, dt, mm, lim, data)
+        num, den, dt, mm, lim, data, info)
     scale = check_positive('feedback_scale', feedback_scale)
     kp, ki, kd = scale * kp, scale * ki, scale * kd
     C = sd.pid_tf(kp, ki, kd, pole, dt)
@@ -561,7 +560,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                  f"modulus margin {mm:g}"
                  f"{'' if ki == 0 else f' and |T| <= {sd.T_PEAK:g}'}"
                  f"{where}, crossover below {lim:.3g} plant bandwidths: "
-                 f"{lim_why}{sdata.raised_words(num, den, C, ki, data, scale)}")
+                 f"{lim_why}{sdata.raised_words(num, den, C, info)}")
+    lim = info.get('limit', lim)
     design = dict(model=model, dt=dt, kp=float(kp), ki=float(ki),
                   kd=float(kd), derivative_pole=float(pole),
                   pid=ct.tf(C.num[0][0], C.den[0][0], dt,
