@@ -424,7 +424,7 @@ def design_pid(num, den, dt, modulus_margin, limit=None, measured=None,
                 best = refined
     if best is not None and not integrating and measured is not None \
             and measured[1]:
-        raised = _raised(best, num, den, dt, (zc, P, wc > most * wb),
+        raised = _raised(best, num, den, dt, (wc, P, wc > most * wb),
                          model, modulus_margin, w)
         if info is not None and raised[0] != best[0]:
             info.update(raised=raised[0] / best[0], limit=most)
@@ -443,15 +443,14 @@ def _raised(best, num, den, dt, read, model, modulus_margin, w):
     """The PID `best` (kp, ki, kd, pole) with its gains raised together by
     the largest factor of `RAISE_MOST`'s steps whose loop meets the
     modulus margin and |L| <= 1 where flagged on the columns the design
-    reads (`read`: z, P, flags), at least `MODEL_FLOOR` of that margin
-    and the same crossover limit on the model (`model`: P and flags on
-    the grid w), and is stable, unconditionally, on the plant num/den
-    (sign applied)."""
+    reads (`read`: frequencies, P, flags), at least `MODEL_FLOOR` of that
+    margin and the same crossover limit on the model (`model`: P and
+    flags on the grid w), and is stable, unconditionally, on the plant
+    num/den (sign applied)."""
     kp, ki, kd, pole = best
-    loops = []
-    for zc, P, high in (read, (np.exp(1j * w), *model)):
-        D = (1 - pole) * (zc - 1) / (zc - pole)
-        loops.append(((kp + ki * zc / (zc - 1) + kd * D) * P, high))
+    one, C = np.ones(1), pid_tf(kp, ki, kd, pole, dt)
+    loops = [(P * loop_gain(one, one, C, wk), high)
+             for wk, P, high in (read, (w, *model))]
     floors = (modulus_margin, MODEL_FLOOR * modulus_margin)
     found = best
     for f in RAISE_MOST ** np.linspace(0.0, 1.0, RAISE_STEPS + 1)[1:]:
