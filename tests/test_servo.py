@@ -356,6 +356,7 @@ def test_a_pid_is_raised_only_where_the_data_vouch_for_the_model(
     case = sw.data.drive_case(0, 'position', play, n=3000)
     lin = sw.identify_linear(case.u, case.y, nb=3, nf=4, nk=1, dt=case.dt)
     ctrl = sw.servo_controller(lin)
+    most = sd.RAISE_MOST
     monkeypatch.setattr(sd, 'RAISE_MOST', 1.0)
     plain = sw.servo_controller(lin)
     raised = 'raised together' in ctrl.notes[0]
@@ -378,6 +379,13 @@ def test_a_pid_is_raised_only_where_the_data_vouch_for_the_model(
         held = sw.servo_controller(lin, crossover_limit=asked)
         assert held.crossover_limit == asked
         assert _crossover_ratio(held) <= asked * 1.01
+    # and so does RAISE_CROSSOVER, however far the data vouch
+    monkeypatch.setattr(sd, 'RAISE_MOST', most)
+    monkeypatch.setattr(sd, 'RAISE_CROSSOVER', sdata.CROSSOVER_MOST + 0.5)
+    capped = sw.servo_controller(lin)
+    assert capped.crossover_limit <= sdata.CROSSOVER_MOST + 0.5
+    assert _crossover_ratio(capped) <= capped.crossover_limit * 1.01
+    assert capped.kp <= ctrl.kp
 
 
 def test_the_margin_is_held_on_the_response_the_data_measured(lagged_fit):

@@ -452,7 +452,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         an identification result, up to 8 where the residuals of its data
         put the model's relative error below 0.5 in every band up to there
         (`error_bands` of ``sandwichctl.tools.residuals``; much play keeps
-        it at 3), and up to 16 for a PID then raised. Given, it holds.
+        it at 3), and up to 32 for a PID then raised. Given, it holds.
     operating_point : (float, float), optional
         (u0, y0): raw units of u and y at the model's zero.
     name : str, optional
