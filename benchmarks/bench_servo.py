@@ -20,7 +20,10 @@ It prints, per case and design: RMS and maximum error, the RMS error in
 the 100 ms after each reversal of the reference, the input's total
 variation against the linear design's (chatter), the most reversals of y
 in the second half of a hold (>= 3 is a limit cycle) and the share of
-ticks at the motor's torque limit. With ``--sweep`` it also scales the
+ticks at the motor's torque limit, and the hunting guard's scale on the
+feedback's gains at the end of the run (1: it never fired). With
+``--no-guard`` every design runs without the guard (``hunting=False``),
+to compare. With ``--sweep`` it also scales the
 linear feedback on the play-free drive to find the best linear design of
 the sweep (the default's gains by 0.25, 0.5, 2 and 4, and those of the
 design at the fixed crossover limit of a model without data by 1, 2 and
@@ -54,7 +57,7 @@ Run: python benchmarks/bench_servo.py [--seeds 2] [--random 8] [--sweep]
      [--seed0 2 --random0 8] [--feedforward zpetc] [--bands]
      [--to-margin] [--sources] [--mismatch] [--crossover 2]
      [--fixed-crossover] [--peak-t 1.15] [--scales 1.25,1.5,2]
-     [--no-raise]
+     [--no-raise] [--no-guard]
 """
 
 import argparse
@@ -102,6 +105,7 @@ def run(ctrl, r, loop, play, dt, params, seed):
     m = sw.servo_metrics(r, out.outputs[0], out.outputs[1], dt,
                          deadband=1.5 * res)
     m['saturation'] = drive.saturated / r.size
+    m['guard'] = ctrl.feedback_gain     # the hunting guard's scale at the end
     return m
 
 
@@ -202,6 +206,9 @@ def main():
                     help="no PID raised past |T| <= 1 where the data vouch "
                     "for the model (RAISE_MOST of sandwichctl.design."
                     "_servo_design set to 1), to compare with the default")
+    ap.add_argument('--no-guard', action='store_true',
+                    help="no hunting guard (hunting=False for every "
+                    "design), to compare with the default")
     ap.add_argument('--fixed-crossover', action='store_true',
                     help="hold the PID's crossover limit at "
                     "CROSSOVER_LIMIT['pid'] (no extension from the "
@@ -219,6 +226,12 @@ def main():
         sd.RAISE_MOST = 1.0
     scales = ([float(f) for f in args.scales.split(',')] if args.scales
               else [])
+    if args.no_guard:
+        design = sw.servo_controller
+
+        def unguarded(model, **kw):
+            return design(model, **{'hunting': False, **kw})
+        sw.servo_controller = unguarded
     rows, checks, bands, margin, sources, swept = [], [], [], [], [], []
     mism, scaled_rows = [], []
     start = time.perf_counter()
@@ -267,6 +280,7 @@ def main():
                          f"{m['near_reversals'] * 1e6:.1f}",
                          f"{m['activity'] / m_lin['activity']:.2f}",
                          m['hunting'], f"{m['saturation']:.1%}",
+                         f"{m['guard']:.2g}",
                          f"{m_0['rms'] * 1e6:.1f}" if name == 'linear'
                          else '', best if name == 'linear' else '',
                          f"{m['rms'] / m_lin['rms']:.2f}"])
@@ -304,7 +318,9 @@ def main():
                 b = run(c_sw, r, loop, p_play, dt, p_params, seed + 500)
                 mism.append([label, f"{play * 1e6:.0f}", what,
                              f"{a['rms'] * 1e6:.1f}", a['hunting'],
+                             f"{a['guard']:.2g}",
                              f"{b['rms'] * 1e6:.1f}", b['hunting'],
+                             f"{b['guard']:.2g}",
                              f"{b['rms'] / a['rms']:.2f}",
                              b['rms'] / a['rms']])
         if scales:
@@ -327,7 +343,7 @@ def main():
     print("Servo loops on the simulated drive, servo_controller defaults; "
           "errors in um\n")
     print_table(['case', 'play', 'design', 'RMS', 'max', 'near rev.',
-                 'TV/lin', 'hunt', 'sat.', 'no play', 'best swept',
+                 'TV/lin', 'hunt', 'sat.', 'guard', 'no play', 'best swept',
                  'RMS/lin'], rows)
     big = [c for c in checks if c['play'] >= 100e-6]
     ratio = [c['sw']['rms'] / c['lin']['rms'] for c in checks]
@@ -341,6 +357,9 @@ def main():
     print(f"hunting (>= 3 reversals in a hold): linear "
           f"{sum(c['lin']['hunting'] >= 3 for c in checks)}, sandwich "
           f"{sum(c['sw']['hunting'] >= 3 for c in checks)} of {len(checks)}")
+    print(f"hunting guard fired (gains scaled down): linear "
+          f"{sum(c['lin']['guard'] < 1 for c in checks)}, sandwich "
+          f"{sum(c['sw']['guard'] < 1 for c in checks)} of {len(checks)}")
     act = [c['sw']['activity'] / c['lin']['activity'] for c in checks]
     print(f"input activity / linear: worst {max(act):.2f} (target <= 3); "
           f"saturation worst {max(c['sw']['saturation'] for c in checks):.1%}"
@@ -364,13 +383,14 @@ def main():
                   f"{' (target <= 2)' if kind == 'all' else ''}")
     if mism:
         print("\nOn drives that differ from the one identified (RMS um / "
-              "hunt):\n")
-        print_table(['case', 'play', 'drive', 'linear', 'hunt', 'sandwich',
-                     'hunt', 'RMS/lin'], [row[:8] for row in mism])
-        ratio = [row[8] for row in mism]
+              "hunt / the hunting guard's scale on the gains at the end):\n")
+        print_table(['case', 'play', 'drive', 'linear', 'hunt', 'guard',
+                     'sandwich', 'hunt', 'guard', 'RMS/lin'],
+                    [row[:10] for row in mism])
+        ratio = [row[10] for row in mism]
         print(f"hunting (>= 3 reversals in a hold): linear "
               f"{sum(row[4] >= 3 for row in mism)}, sandwich "
-              f"{sum(row[6] >= 3 for row in mism)} of {len(mism)}; "
+              f"{sum(row[7] >= 3 for row in mism)} of {len(mism)}; "
               f"sandwich RMS / linear: median {np.median(ratio):.2f}, "
               f"worst {max(ratio):.2f}")
     if bands:

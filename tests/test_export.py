@@ -77,6 +77,8 @@ SERVOS = {
     'nmp_L2_zpetc': lambda: (NMP_L2, sw.servo_controller(
         NMP_L2, feedforward='zpetc')),
     'sandwich_adapt': lambda: (PAPER, sw.servo_controller(_identified())),
+    'guarded': lambda: (PAPER, sw.servo_controller(_identified(),
+                                                   hunting=0.05)),
 }
 COMPENSATORS = {
     'comp': lambda: sw.sandwich_compensator(PAPER),
@@ -205,7 +207,10 @@ def test_the_cases_cover_what_the_issue_asks(built):
     assert ctrls['nmp_L2'].preview >= 5
     adapting = ctrls['sandwich_adapt']
     assert adapting.adapts and not any(
-        c.adapts for k, c in ctrls.items() if k != 'sandwich_adapt')
+        c.adapts for k, c in ctrls.items()
+        if k not in ('sandwich_adapt', 'guarded'))
+    assert ctrls['guarded'].hunting and not any(
+        c.hunting for k, c in ctrls.items() if k != 'guarded')
     _loop(PAPER, adapting)
     assert abs(adapting.band_gain - 1.0) > 0.05     # the estimate moves
     # the smoothed branch of the inverse is taken (steps of its input
@@ -226,6 +231,24 @@ def test_the_cases_cover_what_the_issue_asks(built):
     dv = np.abs(w_ahead - np.r_[0.0, v_hat[:-1]])
     assert np.sum((dv > 0) & (dv < width)) > 100
     assert np.sum(dv >= width) > 100 and np.sum(dv == 0) > 100
+
+
+def test_the_hunting_guard_steps_the_same_in_c(built):
+    # y swinging in the holds of the reference fires the guard: in C as
+    # in Python, bit for bit in double
+    _, lib, objects = built
+    model, ctrl = objects['guarded']
+    r_ahead, y, _ = _loop(model, ctrl)
+    rng = np.random.default_rng(3)
+    y = y + 0.2 * np.sign(np.sin(np.arange(y.size) / 7.0)) \
+        + 0.01 * rng.standard_normal(y.size)
+    u_py = _python(ctrl, r_ahead, y)
+    assert ctrl.feedback_gain == ctrl.hunting['floor']
+    u_c = CStep(lib, 'guarded_d', 'double').run(r_ahead, y)
+    np.testing.assert_array_equal(u_c, u_py)
+    u_f = CStep(lib, 'guarded_f', 'float').run(r_ahead, y)
+    assert np.max(np.abs(u_f - u_c)) <= FLOAT_BOUND_SMOOTHED * \
+        np.max(np.abs(u_c))
 
 
 @pytest.mark.parametrize('case', list(COMPENSATORS))

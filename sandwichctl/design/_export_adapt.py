@@ -1,6 +1,9 @@
-"""The C lines of a servo step that estimates its band's gain and the
-blend of its two linear feedforwards online (`export_c`; the Python
-kernel is `_servo_kernel._blend`, operation for operation)."""
+"""The C lines of a servo step that adapts online (`export_c`): the
+band's gain and the blend of its two linear feedforwards (the Python
+kernel is `_servo_kernel._blend`) and the hunting guard's scale on the
+feedback (`_servo_kernel._guard`), operation for operation."""
+
+from ._servo_kernel import TURNS
 
 
 def blend_body(w, ps, lin, oth):
@@ -59,3 +62,65 @@ def blend_body(w, ps, lin, oth):
         '        u_ff += u_lin;',
         '        u_ff += b * d;',
         '    }']
+
+
+def guard_parts(w, sc):
+    """(state members, constants, step lines) of the hunting guard
+    (`_servo_kernel._guard`): the lines scale e, the feedback's error."""
+    T, n = w.T, w.name
+    one, zero = w.num(1.0), w.num(0.0)
+    members = [(f"{T} guard_dc;", "the guard's scale on the feedback, less 1"),
+               (f"{T} guard_r;", 'r(k-1), to tell a hold'),
+               (f"{T} guard_n;", 'samples into the hold'),
+               (f"{T} guard_ext;", "y's last extreme in the hold"),
+               (f"{T} guard_dir;", 'its direction: -1, 0 or 1'),
+               (f"{T} guard_turns;", 'reversals of y counted'),
+               (f"{T} guard_last;", 'guard_n at the last one')]
+    consts = ['/* Hunting guard: reversals of y in a hold scale the '
+              'feedback down. */',
+              w.const('hunt', sc['hunt'], 'deadband of a reversal of y'),
+              w.const('settle', sc['settle'], 'samples into a hold before '
+                      'reversals count'),
+              w.const('beta', sc['beta'], 'factor on the scale per '
+                      f'{TURNS} reversals'),
+              w.const('floor', sc['floor'], 'least scale'),
+              w.const('gap', sc['gap'], 'most samples between reversals '
+                      'counted in a row')]
+    body = [
+        '    {                       /* the hunting guard */',
+        f"        {T} move, c;",
+        '        if (r_now != s->guard_r)',
+        f"            s->guard_n = {zero};",
+        '        else',
+        f"            s->guard_n += {one};",
+        '        s->guard_r = r_now;',
+        f"        if (s->guard_n < {n}_settle) {{",
+        '            s->guard_ext = yd;',
+        f"            s->guard_dir = {zero};",
+        f"            s->guard_turns = {zero};",
+        '        } else {',
+        '            move = yd - s->guard_ext;',
+        f"            if (s->guard_dir * move > {zero})",
+        '                s->guard_ext = yd;',
+        f"            else if ({w.abs}(move) > {n}_hunt) {{",
+        f"                if (s->guard_dir != {zero}) {{",
+        f"                    if (s->guard_n - s->guard_last <= {n}_gap)",
+        f"                        s->guard_turns += {one};",
+        '                    else',
+        f"                        s->guard_turns = {zero};",
+        '                }',
+        f"                s->guard_dir = move > {zero} ? {one} : -{one};",
+        '                s->guard_ext = yd;',
+        '                s->guard_last = s->guard_n;',
+        '            }',
+        f"            if (s->guard_turns >= {w.num(TURNS)}) {{",
+        f"                c = ({one} + s->guard_dc) * {n}_beta;",
+        f"                if (c < {n}_floor)",
+        f"                    c = {n}_floor;",
+        f"                s->guard_dc = c - {one};",
+        f"                s->guard_turns = {zero};",
+        '            }',
+        '        }',
+        f"        e *= {one} + s->guard_dc;",
+        '    }']
+    return members, consts, body

@@ -6,7 +6,7 @@ The layout is written by `pack` and read by `_servo_step`:
 
 ``ix``: [preview, lead, n_fb, n_pre, n_post, compensate,
          off_fb, off_pre, off_post, off_scalar, n_lin, off_lin,
-         n_ps, off_ps, adapt]
+         n_ps, off_ps, adapt, n_other, off_other, blend, off_guard]
 
 - the feedback block C (e -> u_fb), the linear feedforward (r_ahead ->
   u_lin), the pre-inverse block (r_ahead -> w, the backlash output
@@ -15,16 +15,23 @@ The layout is written by `pack` and read by `_servo_step`:
 - the process sensitivity block PS = P / (1 + C P) of the design plant
   (u_post -> phi, the regressor of the band's gain) is packed the same way;
 - the scalars are [m1, m2, D1, D2, width, mbar, rate, alpha, lam, p0,
-  pmax, gmax, u0, y0]: x = alpha w / mbar + the band offset of the
-  inverse; the band path's output is scaled by g in [0, gmax], estimated
-  online by recursive least squares with forgetting factor lam, initial
-  covariance p0 and largest covariance pmax, when ``adapt`` is set.
+  pmax, gmax, pb0, pbmax, hunt, settle, beta, floor, gap, u0, y0]: x = alpha
+  w / mbar + the band offset of the inverse; the band path's output is
+  scaled by g in [0, gmax], estimated online by recursive least squares
+  with forgetting factor lam, initial covariance p0 and largest
+  covariance pmax, when ``adapt`` is set; with hunt > 0 the hunting guard
+  (`_guard`) scales the error fed to C by c, which drops by beta (down to
+  floor) whenever y reverses `TURNS` times in a row by more than hunt, each
+  within `gap` samples of the last, in one hold of the reference, counted
+  from `settle` samples into it.
 
 The state `s` is laid out as [reference delay line (preview), w delay
 line (lead), feedback states, pre states, x_prev, v_prev, offset, post
 states, linear feedforward states, PS states, g - 1, 1 - P / p0, the
 other feedforward's states, and when it is blended, the second PS states,
-b, 1 - P_bb / pb0, P_bg / pb0]: all zero at rest, where g = 1, b = 0 and
+b, 1 - P_bb / pb0, P_bg / pb0; then the guard's c - 1, r(k-1), samples
+into the hold, y's last extreme, its direction, the reversals counted and
+the sample of the last]: all zero at rest, where g = 1, b = 0, c = 1 and
 the covariance is the prior's.
 """
 
@@ -35,8 +42,13 @@ from .inverse import _inverse_step
 
 #: index of each scalar in the scalar part of p
 (_M1, _M2, _D1, _D2, _WIDTH, _MBAR, _RATE, _ALPHA, _LAM, _P0, _PMAX, _GMAX,
- _PB0, _PBMAX, _U0, _Y0) = range(16)
-NSCALAR = 16
+ _PB0, _PBMAX, _HUNT, _SETTLE, _BETA, _FLOOR, _GAP, _U0, _Y0) = range(21)
+NSCALAR = 21
+#: reversals of y in one hold that make the hunting guard scale down
+TURNS = 3
+#: the guard's state: c - 1, r(k-1), samples into the hold, y's last
+#: extreme, its direction, reversals counted, the sample of the last one
+NGUARD = 7
 
 
 def pack(feedback, pre, post, linear, sensitivity, other, scalars, preview,
@@ -61,9 +73,10 @@ def pack(feedback, pre, post, linear, sensitivity, other, scalars, preview,
                   + offsets[:3] + [pos, n_lin, offsets[3], n_ps, offsets[4],
                                    int(bool(adapt)), n_other, offsets[5],
                                    int(bool(blend))], dtype=np.int64)
-    nstate = (preview + lead + sizes[0] + sizes[1] + 3 + sizes[2] + n_lin
-              + n_ps + 2 + n_other + (n_ps + 3 if blend else 0))
-    return p, ix, nstate
+    guard = (preview + lead + sizes[0] + sizes[1] + 3 + sizes[2] + n_lin
+             + n_ps + 2 + n_other + (n_ps + 3 if blend else 0))
+    ix = np.r_[ix, guard]
+    return p, ix, guard + NGUARD
 
 
 def adapt_index(ix):
@@ -114,7 +127,10 @@ def servo_step(p, ix, s, r_ahead, y):
     # feedback on the error against the reference of this sample
     r_now = _shift(s, 0, preview, ra)
     i_fb = preview + lead
-    u_fb = _block(p, ix[6], n_fb, s, i_fb, r_now - yd)
+    e = r_now - yd
+    if p[sc + _HUNT] > 0.0:
+        e *= _guard(p, ix, s, r_now, yd)
+    u_fb = _block(p, ix[6], n_fb, s, i_fb, e)
     # feedforward: the backlash output wanted, the inverse, L1's inverse
     i_pre = i_fb + n_fb
     w_ahead = _block(p, ix[7], n_pre, s, i_pre, ra)
@@ -153,6 +169,43 @@ def servo_step(p, ix, s, r_ahead, y):
             u_ff *= _adapt(p, ix, s, i_ps, u_ff, r_now - yd)
         u_ff += u_lin
     return p[sc + _U0] + u_fb + u_ff
+
+
+@numba.njit(cache=True)
+def _guard(p, ix, s, r_now, yd):
+    """The hunting guard's scale c(k) on the feedback's error: in a hold
+    of the reference (r(k) = r(k-1)), from `settle` samples into it, y's
+    reversals by more than `hunt` from its last extreme are counted while
+    each comes within `gap` samples of the one before (the count restarts
+    from 0 after a slower one), and each `TURNS` of them multiply c by
+    beta, down to floor (1 at rest)."""
+    sc, i = ix[9], ix[18]
+    if r_now != s[i + 1]:
+        s[i + 2] = 0.0                  # a new hold starts
+    else:
+        s[i + 2] += 1.0
+    s[i + 1] = r_now
+    if s[i + 2] < p[sc + _SETTLE]:
+        s[i + 3], s[i + 4], s[i + 5] = yd, 0.0, 0.0
+    else:
+        move = yd - s[i + 3]
+        if s[i + 4] * move > 0.0:
+            s[i + 3] = yd               # further the same way
+        elif abs(move) > p[sc + _HUNT]:
+            if s[i + 4] != 0.0:
+                if s[i + 2] - s[i + 6] <= p[sc + _GAP]:
+                    s[i + 5] += 1.0
+                else:
+                    s[i + 5] = 0.0
+            s[i + 4] = 1.0 if move > 0.0 else -1.0
+            s[i + 3] = yd
+            s[i + 6] = s[i + 2]
+        if s[i + 5] >= TURNS:
+            c = (1.0 + s[i]) * p[sc + _BETA]
+            if c < p[sc + _FLOOR]:
+                c = p[sc + _FLOOR]
+            s[i], s[i + 5] = c - 1.0, 0.0
+    return 1.0 + s[i]
 
 
 @numba.njit(cache=True)

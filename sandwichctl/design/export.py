@@ -44,7 +44,7 @@ import numpy as np
 
 from .compensator import SandwichCompensator
 from .servo import ServoController
-from ._export_adapt import blend_body
+from ._export_adapt import blend_body, guard_parts
 from ._servo_kernel import NSCALAR
 from ..model.sandwich import SandwichSystem
 
@@ -64,7 +64,8 @@ _C_KEYWORDS = frozenset(
 
 #: names of the scalars in the packed parameters (see _servo_kernel)
 _SCALARS = ('m1', 'm2', 'D1', 'D2', 'width', 'mbar', 'rate', 'alpha', 'lam',
-            'p0', 'pmax', 'gmax', 'pb0', 'pbmax', 'u0', 'y0')
+            'p0', 'pmax', 'gmax', 'pb0', 'pbmax', 'hunt', 'settle', 'beta',
+            'floor', 'gap', 'u0', 'y0')
 
 
 #: longest name: file names stop at 255 bytes on most file systems
@@ -383,6 +384,8 @@ def _servo_parts(ctrl, w):
         members += [(f"{T} blend;", "the other feedforward's share b"),
                      (f"{T} blend_q;", "its variance: 1 - var / pb0"),
                      (f"{T} blend_c;", "its covariance with g, over pb0")]
+    guard = (guard_parts(w, sc) if sc['hunt'] > 0 else ([], [], []))
+    members += guard[0]
     members += [(f"{T} u0;", 'operating point: u at the model\'s zero'),
                 (f"{T} y0;", 'operating point: y at the model\'s zero')]
 
@@ -414,6 +417,7 @@ def _servo_parts(ctrl, w):
     if blends:
         consts += [w.const('pb0', sc['pb0'], "the blend's initial variance"),
                    w.const('pbmax', sc['pbmax'], 'its largest variance')]
+    consts += guard[1]
     functions = []
     nmax = max(b.n for b in (fb, pre, post, lin, ps, oth))
     if nmax:
@@ -428,11 +432,12 @@ def _servo_parts(ctrl, w):
     w_now = f"{n}_shift(s->w_line, {lead}, w_ahead)" if lead else 'w_ahead'
     body = [f"    const {T} ra = r_ahead - s->y0;",
             f"    const {T} yd = y - s->y0;",
-            f"    {T} r_now, u_fb, w_ahead, w, x, u_ff;",
+            f"    {T} r_now, e, u_fb, w_ahead, w, x, u_ff;",
             '    /* feedback on the error against the reference of this '
             'sample */',
             f"    r_now = {r_now};",
-            f"    u_fb = {fb.call(w, 'r_now - yd')};",
+            '    e = r_now - yd;'] + guard[2] + [
+            f"    u_fb = {fb.call(w, 'e')};",
             '    /* feedforward: the backlash output wanted, the inverse, '
             "L1's inverse */",
             f"    w_ahead = {pre.call(w, 'ra')};",

@@ -54,6 +54,19 @@ the error's sensitivity to that gain. The share of the other linear
 model's feedforward (the baseline's or the sandwich's) is estimated with
 it. Both are deterministic and bounded, and ``reset()`` restarts them
 (``adapt``).
+
+Hunting in the holds: online
+----------------------------
+A heavy load with little friction coasts into the play, and a loop whose
+gains suit the identified model can then hunt in the holds, although
+the record (whose excitation keeps the load moving) showed nothing. The
+controller counts the reversals of y in each hold of the reference; every
+three in quick succession (as fast as the loop's crossover: a load that
+friction holds and the integrator breaks free hunts more slowly, and lower
+gains would make that worse) by more than a deadband scale the error fed
+to the PID, and so its gains, by 0.6, down to 0.25 (``hunting``, ``ctrl.feedback_gain``; the
+loop is checked stable down there). Scaling the error keeps the PID's
+states, so u does not jump.
 """
 
 import math
@@ -65,11 +78,13 @@ import control as ct
 from . import _servo_design as sd
 from . import _servo_data as sdata
 from . import _servo_band as sb
+from ._servo_guard import guard_scalars
+from ._servo_inputs import check_plant_tf, unwrap_model
 from ._servo_kernel import (pack, servo_step, servo_run, adapt_index,
                             NSCALAR)
 from .loop import servo_loop, ss_arrays
 from ..model.sandwich import SandwichSystem
-from .._checks import (DATA_RANGE, MAX_ORDER, PLAIN_REALS, check_finite,
+from .._checks import (MAX_ORDER, PLAIN_REALS, check_finite,
                        check_int, check_name, check_nonnegative,
                        check_option, check_positive, check_real,
                        check_signal)
@@ -95,59 +110,6 @@ SMOOTHING = 0.02
 def _ss(num, den, dt):
     """(A, B, C, D) arrays of num/den (descending powers of z)."""
     return ss_arrays(ct.tf(num, den, dt))
-
-
-def _unwrap_model(model):
-    """The model of a result, and the result itself (or None)."""
-    inner = getattr(model, 'model', None)
-    if isinstance(inner, (SandwichSystem, ct.TransferFunction)) and \
-            not isinstance(model, (SandwichSystem, ct.TransferFunction)):
-        return inner, model
-    return model, None
-
-
-def _check_plant_tf(name, sys):
-    if not isinstance(sys, ct.TransferFunction) or not sys.issiso() or \
-            not sys.isdtime(strict=True):
-        raise TypeError(
-            f"{name} must be a sandwichctl.SandwichSystem, a discrete SISO "
-            f"control.TransferFunction, or an identification result "
-            f"holding one (sw.identify / sw.identify_linear); got "
-            f"{type(sys).__name__}")
-    num, den = sys.num[0][0].astype(float), sys.den[0][0].astype(float)
-    num = np.trim_zeros(num, 'f')
-    if num.size == 0 or not np.all(np.isfinite(num)) or \
-            not np.all(np.isfinite(den)):
-        raise ValueError(f"{name} must have finite, non-zero coefficients")
-    if num.size >= den.size:
-        raise ValueError(f"{name} must have at least one sample of delay "
-                         f"(strictly proper); with none the loop is "
-                         f"algebraic")
-    gain = np.max(np.abs(num)) / np.max(np.abs(den))
-    lo, hi = DATA_RANGE
-    if not lo <= gain <= hi:
-        what = 'overflow' if gain > hi else 'underflow'
-        raise ValueError(
-            f"{name} has a gain of order {gain:.1e} (largest numerator "
-            f"over largest denominator coefficient), outside {lo:g} .. "
-            f"{hi:g}: the design squares it, which would {what} double "
-            f"precision; rescale u or y (other units)")
-    poles = np.roots(den) if den.size > 1 else np.zeros(0)
-    at_one = np.abs(poles - 1.0) < 1e-6
-    if at_one.sum() > 1 or np.any(np.abs(poles[~at_one]) >= 1.0):
-        raise ValueError(
-            f"{name} must be stable or have one integrator (a pole at "
-            f"z = 1, as a speed-in, position-out axis); got poles "
-            f"{sd._fmt_roots(poles)}. Re-identify with integrators=1 (a "
-            f"speed-in, position-out axis) or integrators=0, or with "
-            f"fewer poles")
-    if np.any(np.abs(poles[at_one] - 1.0) > 1e-12):
-        # the integrator exactly at 1: at 1 - 1e-8 the grid would reach
-        # down to 1e-9 rad/sample, where the plant's gain is 10 times
-        # below its integrator's, and the bandwidth would come out 8 times
-        # too high (random drive 18 of benchmarks/bench_servo.py)
-        den = den[0] * np.real(np.poly(np.where(at_one, 1.0, poles)))
-    return num, den
 
 
 class ServoController(ct.NonlinearIOSystem):
@@ -202,6 +164,11 @@ class ServoController(ct.NonlinearIOSystem):
         band jump is spread over (0 for a linear model).
     compensates : bool
         Whether a backlash inverse runs in the feedforward.
+    hunting : dict or None
+        The hunting guard: 'deadband' (in y), 'settle' (samples into a
+        hold before reversals count), 'gap' (most samples between
+        reversals counted in a row), 'beta' and 'floor' (each detection's
+        factor on the gains, and their least); None without it.
     notes : list of str
         Why each choice was made, as `repr` prints them.
     operating_point : tuple
@@ -288,6 +255,12 @@ class ServoController(ct.NonlinearIOSystem):
                 if self.adapts else 1.0)
 
     @property
+    def feedback_gain(self):
+        """The hunting guard's scale c on the feedback's gains now (1 at
+        rest and without the guard; see `hunting`)."""
+        return 1.0 + float(self._s[int(self._ix[18])])
+
+    @property
     def feedforward_blend(self):
         """The share b of the other linear feedforward now (0 at rest;
         moved online when `blends`): u_lin = (1 - b) F + b F_other, with F
@@ -349,7 +322,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                      jump_samples=None, feedback_scale=1.0,
                      crossover_limit=None, feedforward_from='auto',
                      feedback_from='auto',
-                     adapt=None,
+                     adapt=None, hunting=None,
                      operating_point=(0.0, 0.0), name=None):
     r"""Design a servo controller from an identified or known model.
 
@@ -442,6 +415,19 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         baseline's or the sandwich's, ``ctrl.feedforward_blend``, 0 at
         rest) is estimated with g; its prior is worth one
         `servo_reference` run travelling five of the model's bands.
+    hunting : None, bool or float, optional
+        The hunting guard: in a hold of the reference, every 3 reversals
+        of y in a row by more than a deadband, each within 1.5 half-periods
+        of the loop's crossover of the last, scale the feedback's gains by
+        0.6, down to 0.25 (a heavy load that coasts into the play makes
+        a loop hunt that the record did not show; see the notes of
+        ``sandwichctl.design._servo_guard``). ``ctrl.feedback_gain``
+        reads the scale, ``reset()`` restores 1. By default (None) it
+        runs for an identification result, with a deadband of 8 times
+        its record's noise (``noise_level`` of
+        ``sandwichctl.tools.residuals``); True asks for it (an error
+        without a record), False turns it off, and a number is the
+        deadband in y's units.
     feedback_scale : float, optional
         Factor on the designed PID gains (default 1), for detuning or
         sweeps; the scaled loop is checked like the designed one.
@@ -483,7 +469,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     """
     asked = {k: v for k, v in locals().items() if k != 'model'}
     source = model
-    model, result = _unwrap_model(model)
+    model, result = unwrap_model(model)
     band_by_default = band_fraction is None
     mm = check_finite('modulus_margin', modulus_margin)
     if not 0 < mm < 1:
@@ -529,11 +515,11 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         ff_zeros = np.concatenate([model.L1.zeros(), model.L2.zeros()])
         P, pid, ff_model, linear_note, lin_model = sd.linear_part(
             model, result, lin_model, feedback_from, feedforward_from,
-            integrating, ff_zeros, max_preview, mm, _check_plant_tf,
+            integrating, ff_zeros, max_preview, mm, check_plant_tf,
             lambda n, d: limit(n, d)[0], measured, info)
     else:
         P, linear_note, pid = model, None, None
-    num, den = _check_plant_tf('model' if P is model else 'the design plant',
+    num, den = check_plant_tf('model' if P is model else 'the design plant',
                                P)
     dt = P.dt
     # the baseline's gains were designed when it was checked
@@ -578,7 +564,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     pre = post = zero
     lead, jump, band_fraction_out, smoothing_out = 0, 0, 0.0, 0.0
     ps, adapts = zero, False
-    scal = [1, 1, 0, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, u0, y0]
+    scal = [1, 1, 0, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, u0, y0]
     other, other_inv, blends = zero, None, False
     if feedforward is None:
         preview, lin_ff = 0, zero
@@ -666,7 +652,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         scal = [*slopes, band_fraction_out * co['D1'],
                 band_fraction_out * co['D2'], smoothing_out, mbar,
                 band_x / jump if jump > 1 else 0.0, float(exact), 1, 0, 0,
-                1, 0, 0, u0, y0]
+                1, 0, 0, 0, 0, 0, 0, 0, u0, y0]
         got = sd.band_adaptation(adapt, num, den, C, post, band_x,
                                  band_fraction_out, exact, band_by_default,
                                  scal, notes)
@@ -691,9 +677,13 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     if feedforward is not None:
         lin_ff = _ss(fn, fd, dt)
     band_fraction, smoothing = band_fraction_out, smoothing_out
+    scal[14:19] = guard_scalars(hunting, result, num, den, C, notes)
     design.update(preview=int(preview), band_fraction=float(band_fraction),
                   smoothing=float(smoothing), jump_samples=int(jump),
                   compensates=bool(comp), adapts=bool(adapts), _ps=ps,
+                  hunting=(dict(zip(('deadband', 'settle', 'beta', 'floor',
+                                     'gap'), scal[14:19]))
+                           if scal[14] else None),
                   blends=bool(blends), _other=other,
                   notes=notes, _pre=pre, _post=post,
                   _linear=lin_ff,

@@ -37,7 +37,7 @@ from ._starts import (splits, opened, random_start, recursive_start,
                       held_starts, holds)
 from .linear import oe_transfer_function
 from .._checks import progress_bar
-from ..tools.residuals import band_errors
+from ..tools.residuals import band_errors, noise_level
 
 __all__ = []
 
@@ -383,7 +383,8 @@ class Search:
                                               lin['F'], nk_l, self.task.dt),
                 'B': lin['B'] * prob.sy / prob.su,
                 'F': np.array(lin['F'], dtype=float),
-                'error_bands': bands, 'relative_error': relative}
+                'error_bands': bands, 'relative_error': relative,
+                'noise': noise_level(r_lin)}
 
     def extend(self, s, phi):
         """A model start of sign s with the linear fit's output offsets

@@ -412,6 +412,34 @@ def relative_error(residuals, yhat):
     return band_errors(residuals, yhat)[1]
 
 
+def noise_level(residuals):
+    """The standard deviation of the noise on a record, read from a fit's
+    residuals: 1.4826 times the median absolute deviation of their
+    increments, over sqrt(2). Differencing removes the slow model error
+    (what play or a missed mode leaves) and the median ignores outliers,
+    so for white noise this is its standard deviation, and for an encoder
+    reading quantised to q about 0.3 q. A list holds one array per
+    experiment. None for fewer than 3 samples.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sandwichctl.tools.residuals import noise_level
+    >>> rng = np.random.default_rng(1)
+    >>> slow = np.sin(np.linspace(0, 20, 20000))
+    >>> e = slow + 0.01 * rng.standard_normal(20000)
+    >>> round(noise_level(e), 3)
+    0.01
+    """
+    parts = (residuals if isinstance(residuals, (list, tuple))
+             else [residuals])
+    d = np.concatenate([np.diff(np.asarray(part, dtype=float).reshape(-1))
+                        for part in parts])
+    if d.size < 2:
+        return None
+    return float(1.4826 * np.median(np.abs(d - np.median(d))) / np.sqrt(2))
+
+
 def band_errors(residuals, yhat):
     """(`error_bands`, `relative_error`) of the same residuals, from one
     pass over their spectra."""
