@@ -64,6 +64,16 @@ def test_every_three_reversals_in_a_hold_scale_the_gains():
     ctrl.reset()
     ctrl.run(*_hold_then_swing(ctrl, 0.2, 3, period=int(gap)))
     assert ctrl.feedback_gain == pytest.approx(0.6)
+    # once the gains are scaled by c the loop is slower, and reversals
+    # within gap / c samples count
+    slower = int(gap / sg.BETA) - 1
+    assert slower > gap
+    for period, gain in ((slower + 3, 0.6), (slower, 0.36)):
+        r, y = _hold_then_swing(ctrl, 0.2, 3, period=10)
+        y = np.r_[y, y[-1] * (-1) ** (np.arange(4 * period) // period + 1)]
+        ctrl.reset()
+        ctrl.run(np.zeros(y.size), y)
+        assert ctrl.feedback_gain == pytest.approx(gain)
     # a slow reversal restarts the count: two fast ones, a slow one, two
     # fast ones leave the gains; a third fast one scales them
     start = int(ctrl.hunting['settle']) + 5

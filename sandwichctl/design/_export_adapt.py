@@ -85,7 +85,7 @@ def guard_parts(w, sc):
                       f'{TURNS} reversals'),
               w.const('floor', sc['floor'], 'least scale'),
               w.const('gap', sc['gap'], 'most samples between reversals '
-                      'counted in a row')]
+                      'counted in a row, over the scale')]
     body = [
         '    {                       /* the hunting guard */',
         f"        {T} move, c;",
@@ -104,10 +104,11 @@ def guard_parts(w, sc):
         '                s->guard_ext = yd;',
         f"            else if ({w.abs}(move) > {n}_hunt) {{",
         f"                if (s->guard_dir != {zero}) {{",
-        f"                    if (s->guard_n - s->guard_last <= {n}_gap)",
-        f"                        s->guard_turns += {one};",
+        '                    if (s->guard_n - s->guard_last',
+        f"                        <= {n}_gap / ({one} + s->guard_dc))",
+        f"                            s->guard_turns += {one};",
         '                    else',
-        f"                        s->guard_turns = {zero};",
+        f"                            s->guard_turns = {zero};",
         '                }',
         f"                s->guard_dir = move > {zero} ? {one} : -{one};",
         '                s->guard_ext = yd;',

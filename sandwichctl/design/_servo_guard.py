@@ -11,8 +11,9 @@ its excitation keeps the load moving. The loop shows it in its own
 measurements, so the controller watches them: in a hold of the reference,
 from `SETTLE` time constants of the loop's crossover on, every `TURNS`
 (3) reversals of y in a row by more than a deadband, each within `GAP`
-half-periods of the crossover (`GAP` pi / w_c samples) of the last,
-scale the error fed to the PID by `BETA`, down to `FLOOR`. Scaling the error, not the PID's output,
+half-periods of the crossover (`GAP` pi / w_c samples, over the scale
+reached: lower gains slow the loop) of the last, scale the error fed to
+the PID by `BETA`, down to `FLOOR`. Scaling the error, not the PID's output,
 keeps the integrator's state: the input does not jump. It only lowers
 the gains, and the loop is checked stable down to the floor; ``reset()``
 restores them.
@@ -117,6 +118,7 @@ def guard_scalars(hunting, result, num, den, C, notes):
         f"hunting guard: in a hold, from {settle:.0f} samples in, each "
         f"{TURNS} reversals of y in a row by more than {band:.3g} ({why}), "
         f"each within {gap:.0f} samples of the last ({GAP:g} half-periods "
-        f"of the crossover), scale the feedback's gains by {BETA:g}, down "
-        f"to {floor:.3g} (ctrl.feedback_gain; reset() restores them)")
+        f"of the crossover; over the scale reached), scale the feedback's "
+        f"gains by {BETA:g}, down to {floor:.3g} (ctrl.feedback_gain; "
+        f"reset() restores them)")
     return [float(band), settle, BETA, floor, gap]

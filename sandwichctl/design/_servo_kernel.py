@@ -22,8 +22,8 @@ The layout is written by `pack` and read by `_servo_step`:
   covariance pmax, when ``adapt`` is set; with hunt > 0 the hunting guard
   (`_guard`) scales the error fed to C by c, which drops by beta (down to
   floor) whenever y reverses `TURNS` times in a row by more than hunt, each
-  within `gap` samples of the last, in one hold of the reference, counted
-  from `settle` samples into it.
+  within gap / c samples of the last, in one hold of the reference,
+  counted from `settle` samples into it.
 
 The state `s` is laid out as [reference delay line (preview), w delay
 line (lead), feedback states, pre states, x_prev, v_prev, offset, post
@@ -176,9 +176,9 @@ def _guard(p, ix, s, r_now, yd):
     """The hunting guard's scale c(k) on the feedback's error: in a hold
     of the reference (r(k) = r(k-1)), from `settle` samples into it, y's
     reversals by more than `hunt` from its last extreme are counted while
-    each comes within `gap` samples of the one before (the count restarts
-    from 0 after a slower one), and each `TURNS` of them multiply c by
-    beta, down to floor (1 at rest)."""
+    each comes within gap / c samples of the one before (lower gains slow
+    the loop down; the count restarts from 0 after a slower one), and each
+    `TURNS` of them multiply c by beta, down to floor (1 at rest)."""
     sc, i = ix[9], ix[18]
     if r_now != s[i + 1]:
         s[i + 2] = 0.0                  # a new hold starts
@@ -193,7 +193,7 @@ def _guard(p, ix, s, r_now, yd):
             s[i + 3] = yd               # further the same way
         elif abs(move) > p[sc + _HUNT]:
             if s[i + 4] != 0.0:
-                if s[i + 2] - s[i + 6] <= p[sc + _GAP]:
+                if s[i + 2] - s[i + 6] <= p[sc + _GAP] / (1.0 + s[i]):
                     s[i + 5] += 1.0
                 else:
                     s[i + 5] = 0.0
