@@ -69,13 +69,13 @@ def pack(feedback, pre, post, linear, sensitivity, other, scalars, preview,
     sizes = [feedback[0].shape[0], pre[0].shape[0], post[0].shape[0]]
     n_lin, n_ps = linear[0].shape[0], sensitivity[0].shape[0]
     n_other = other[0].shape[0]
+    # the guard's state comes last
+    guard = (preview + lead + sizes[0] + sizes[1] + 3 + sizes[2] + n_lin
+             + n_ps + 2 + n_other + (n_ps + 3 if blend else 0))
     ix = np.array([preview, lead] + sizes + [int(bool(compensate))]
                   + offsets[:3] + [pos, n_lin, offsets[3], n_ps, offsets[4],
                                    int(bool(adapt)), n_other, offsets[5],
-                                   int(bool(blend))], dtype=np.int64)
-    guard = (preview + lead + sizes[0] + sizes[1] + 3 + sizes[2] + n_lin
-             + n_ps + 2 + n_other + (n_ps + 3 if blend else 0))
-    ix = np.r_[ix, guard]
+                                   int(bool(blend)), guard], dtype=np.int64)
     return p, ix, guard + NGUARD
 
 

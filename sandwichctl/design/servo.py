@@ -64,9 +64,9 @@ controller counts the reversals of y in each hold of the reference; every
 three in quick succession (as fast as the loop's crossover: a load that
 friction holds and the integrator breaks free hunts more slowly, and lower
 gains would make that worse) by more than a deadband scale the error fed
-to the PID, and so its gains, by 0.6, down to 0.25 (``hunting``, ``ctrl.feedback_gain``; the
-loop is checked stable down there). Scaling the error keeps the PID's
-states, so u does not jump.
+to the PID, and so its gains, by 0.6, down to 0.25 (``hunting``,
+``ctrl.feedback_gain``; the loop is checked stable down there). Scaling
+the error keeps the PID's states, so u does not jump.
 """
 
 import math
@@ -520,7 +520,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     else:
         P, linear_note, pid = model, None, None
     num, den = check_plant_tf('model' if P is model else 'the design plant',
-                               P)
+                              P)
     dt = P.dt
     # the baseline's gains were designed when it was checked
     lim, lim_why = limit(num, den)
