@@ -1,6 +1,7 @@
 # Two commands do all the set-up on a fresh machine:
 #   make demo   -- reproduce the paper's Section 5 study (figures in out/)
 #   make test   -- run the test suite (unit tests, doctests, notebooks, docs)
+#                  on the machine's cores
 #   make docs   -- build the documentation site into docs/_build/html
 #   make docs-check -- build it and look at it in headless Chromium
 #                  (screenshots in docs/_build/screenshots; needs chromium:
@@ -30,8 +31,10 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(BIN)/python -m sandwichctl demo --out out
 
+# pytest-xdist runs the test files on every core (at most four), each file's
+# tests in one worker so that its module fixtures are built once
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto --maxprocesses 4 --dist loadfile
 
 # The notebooks are executed at build time through jupyter-cache, which
 # re-runs a notebook only when its code changes; the cache is cleared so
