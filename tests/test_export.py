@@ -249,6 +249,15 @@ def test_the_hunting_guard_steps_the_same_in_c(built):
     u_f = CStep(lib, 'guarded_f', 'float').run(r_ahead, y)
     assert np.max(np.abs(u_f - u_c)) <= FLOAT_BOUND_SMOOTHED * \
         np.max(np.abs(u_c))
+    # y swinging only while the reference moves fires it too (the error's
+    # reversals in a move)
+    _, y, _ = _loop(model, ctrl)
+    moving = np.r_[False, np.diff(r_ahead) != 0]
+    y = y + 0.2 * moving * np.sign(np.sin(np.arange(y.size) / 3.0))
+    u_py = _python(ctrl, r_ahead, y)
+    assert ctrl.feedback_gain < 1.0
+    u_c = CStep(lib, 'guarded_d', 'double').run(r_ahead, y)
+    np.testing.assert_array_equal(u_c, u_py)
 
 
 @pytest.mark.parametrize('case', list(COMPENSATORS))

@@ -1,5 +1,6 @@
 """The hunting guard of ServoController (servo_controller's `hunting`):
-reversals of y in a hold scale the feedback's gains down."""
+reversals of y in a hold, or of the error in a move, scale the feedback's
+gains down."""
 
 import pickle
 import types
@@ -11,6 +12,7 @@ import pytest
 
 import sandwichctl as sw
 from sandwichctl.design import _servo_guard as sg
+from sandwichctl.design._servo_kernel import MOTION_TURNS
 from sandwichctl.tools.residuals import noise_level
 
 PLANT = ct.tf([0.02, 0.01], np.polymul([1, -0.95], [1, -0.6]), 1e-3)
@@ -46,15 +48,26 @@ def test_every_three_reversals_in_a_hold_scale_the_gains():
         assert ctrl.feedback_gain == pytest.approx(gain)
     ctrl.reset()
     assert ctrl.feedback_gain == 1.0
-    # swings inside the deadband, or before the loop has settled, or while
-    # the reference moves, are not hunting
+    # swings inside the deadband, or before the loop has settled, are not
+    # hunting
     ctrl.run(*_hold_then_swing(ctrl, 0.04, 30))
     ctrl.reset()
     ctrl.run(*_hold_then_swing(ctrl, 0.2, 8, period=3, start=0))
     assert int(ctrl.hunting['settle']) > 30
+    assert ctrl.feedback_gain == 1.0
+    # while the reference moves, it takes MOTION_TURNS reversals of the
+    # error in a row (a tracking loop's error turns with the reference)
+    for swings, gain in ((MOTION_TURNS - 1, 1.0), (MOTION_TURNS, 0.6),
+                         (2 * MOTION_TURNS, 0.36)):
+        ctrl.reset()
+        r, y = _hold_then_swing(ctrl, 0.2, swings)
+        ctrl.run(np.arange(r.size) * 1e-3, y)
+        assert ctrl.feedback_gain == pytest.approx(gain)
+    # the count restarts where r turns: a reference that jitters turns
+    # the error at every sample, and that is not the loop hunting
     ctrl.reset()
-    r, y = _hold_then_swing(ctrl, 0.2, 30)
-    ctrl.run(np.arange(r.size) * 1e-3, y)
+    k = np.arange(4000)
+    ctrl.run(1e-3 * k + 0.2 * (-1) ** k, np.zeros(k.size))
     assert ctrl.feedback_gain == 1.0
     # nor are reversals slower than `gap` samples apart (a load that
     # friction holds, broken free by the integrator), however many

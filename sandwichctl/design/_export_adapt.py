@@ -3,7 +3,7 @@ band's gain and the blend of its two linear feedforwards (the Python
 kernel is `_servo_kernel._blend`) and the hunting guard's scale on the
 feedback (`_servo_kernel._guard`), operation for operation."""
 
-from ._servo_kernel import TURNS
+from ._servo_kernel import MOTION_TURNS, TURNS
 
 
 def blend_body(w, ps, lin, oth):
@@ -72,49 +72,69 @@ def guard_parts(w, sc):
     members = [(f"{T} guard_dc;", "the guard's scale on the feedback, less 1"),
                (f"{T} guard_r;", 'r(k-1), to tell a hold'),
                (f"{T} guard_n;", 'samples into the hold'),
-               (f"{T} guard_ext;", "y's last extreme in the hold"),
+               (f"{T} guard_ext;", 'the last extreme: of y in a hold, of '
+                'the error in a move'),
                (f"{T} guard_dir;", 'its direction: -1, 0 or 1'),
-               (f"{T} guard_turns;", 'reversals of y counted'),
-               (f"{T} guard_last;", 'guard_n at the last one')]
-    consts = ['/* Hunting guard: reversals of y in a hold scale the '
-              'feedback down. */',
-              w.const('hunt', sc['hunt'], 'deadband of a reversal of y'),
+               (f"{T} guard_turns;", 'reversals counted'),
+               (f"{T} guard_last;", 'the sample of the last one'),
+               (f"{T} guard_move;", 'samples into the move (0 in a hold)'),
+               (f"{T} guard_step;", "the direction of r's last step")]
+    consts = ['/* Hunting guard: reversals of y in a hold, or of the error in '
+              'a move, scale the feedback down. */',
+              w.const('hunt', sc['hunt'], 'deadband of a reversal'),
               w.const('settle', sc['settle'], 'samples into a hold before '
                       'reversals count'),
               w.const('beta', sc['beta'], 'factor on the scale per '
-                      f'{TURNS} reversals'),
+                      f'{TURNS} reversals in a hold, {MOTION_TURNS} in a '
+                      'move'),
               w.const('floor', sc['floor'], 'least scale'),
               w.const('gap', sc['gap'], 'most samples between reversals '
                       'counted in a row, over the scale')]
     body = [
         '    {                       /* the hunting guard */',
-        f"        {T} move, c;",
-        '        if (r_now != s->guard_r)',
+        f"        {T} move, c, z, t, need, step;",
+        '        if (r_now != s->guard_r) {',
         f"            s->guard_n = {zero};",
-        '        else',
+        f"            step = r_now > s->guard_r ? {one} : -{one};",
+        f"            if (s->guard_move == {zero} || step != s->guard_step) {{",
+        '                s->guard_ext = r_now - yd;',
+        f"                s->guard_dir = {zero};",
+        f"                s->guard_turns = {zero};",
+        '            }',
+        '            s->guard_step = step;',
+        f"            s->guard_move += {one};",
+        '            z = r_now - yd;',
+        '            t = s->guard_move;',
+        f"            need = {w.num(MOTION_TURNS)};",
+        '        } else {',
         f"            s->guard_n += {one};",
+        f"            s->guard_move = {zero};",
+        '            z = yd;',
+        '            t = s->guard_n;',
+        f"            need = {w.num(TURNS)};",
+        '        }',
         '        s->guard_r = r_now;',
-        f"        if (s->guard_n < {n}_settle) {{",
+        f"        if (s->guard_move == {zero} && s->guard_n < {n}_settle) {{",
         '            s->guard_ext = yd;',
         f"            s->guard_dir = {zero};",
         f"            s->guard_turns = {zero};",
         '        } else {',
-        '            move = yd - s->guard_ext;',
+        '            move = z - s->guard_ext;',
         f"            if (s->guard_dir * move > {zero})",
-        '                s->guard_ext = yd;',
+        '                s->guard_ext = z;',
         f"            else if ({w.abs}(move) > {n}_hunt) {{",
         f"                if (s->guard_dir != {zero}) {{",
-        '                    if (s->guard_n - s->guard_last',
+        '                    if (t - s->guard_last',
         f"                        <= {n}_gap / ({one} + s->guard_dc))",
         f"                            s->guard_turns += {one};",
         '                    else',
         f"                            s->guard_turns = {zero};",
         '                }',
         f"                s->guard_dir = move > {zero} ? {one} : -{one};",
-        '                s->guard_ext = yd;',
-        '                s->guard_last = s->guard_n;',
+        '                s->guard_ext = z;',
+        '                s->guard_last = t;',
         '            }',
-        f"            if (s->guard_turns >= {w.num(TURNS)}) {{",
+        '            if (s->guard_turns >= need) {',
         f"                c = ({one} + s->guard_dc) * {n}_beta;",
         f"                if (c < {n}_floor)",
         f"                    c = {n}_floor;",

@@ -18,6 +18,20 @@ keeps the integrator's state: the input does not jump. It only lowers
 the gains, and the loop is checked stable down to the floor; ``reset()``
 restores them.
 
+A loop can also oscillate while the reference moves, where y has no
+rest to reverse about: random drive 0 of the benchmark with 1.5 times the
+play, whose sandwich design did not hunt in the holds before its sine
+and then oscillated through the whole sine at 67 um RMS (the linear
+design, whose guard had fired in the first hold, tracked it at 10 um).
+While r moves the guard counts the reversals of the error r - y instead,
+by the same deadband and window, and scales the gains after every
+`MOTION_TURNS` (24) of them in a row: a loop that tracks turns its error
+at the reference's own changes, at most 12 times in a row on the
+benchmark's drives and those of ``--mismatch`` (an offline count), and
+one that oscillates turns it hundreds of times. The count restarts
+wherever r turns, so that a reference that jitters, and turns the error
+with it at every sample, is not taken for a loop that hunts.
+
 Only fast reversals count. A limit cycle the gains cause, with the
 play's phase lag, runs near or above the crossover: on the benchmark's
 hunting drives their half-periods were 0.14 to 0.4 times the crossover's
@@ -38,7 +52,7 @@ import math
 import numpy as np
 
 from ._servo_design import crossover, loop_radius
-from ._servo_kernel import TURNS
+from ._servo_kernel import MOTION_TURNS, TURNS
 from ..tools.residuals import noise_level
 from .._checks import check_positive
 
@@ -118,7 +132,8 @@ def guard_scalars(hunting, result, num, den, C, notes):
         f"hunting guard: in a hold, from {settle:.0f} samples in, each "
         f"{TURNS} reversals of y in a row by more than {band:.3g} ({why}), "
         f"each within {gap:.0f} samples of the last ({GAP:g} half-periods "
-        f"of the crossover; over the scale reached), scale the feedback's "
-        f"gains by {BETA:g}, down to {floor:.3g} (ctrl.feedback_gain; "
-        f"reset() restores them)")
+        f"of the crossover; over the scale reached), and while the "
+        f"reference moves each {MOTION_TURNS} such reversals of the error, "
+        f"scale the feedback's gains by {BETA:g}, down to {floor:.3g} "
+        f"(ctrl.feedback_gain; reset() restores them)")
     return [float(band), settle, BETA, floor, gap]

@@ -23,16 +23,18 @@ The layout is written by `pack` and read by `_servo_step`:
   (`_guard`) scales the error fed to C by c, which drops by beta (down to
   floor) whenever y reverses `TURNS` times in a row by more than hunt, each
   within gap / c samples of the last, in one hold of the reference,
-  counted from `settle` samples into it.
+  counted from `settle` samples into it, or whenever the error r - y
+  reverses `MOTION_TURNS` times in a row that way while r moves one way.
 
 The state `s` is laid out as [reference delay line (preview), w delay
 line (lead), feedback states, pre states, x_prev, v_prev, offset, post
 states, linear feedforward states, PS states, g - 1, 1 - P / p0, the
 other feedforward's states, and when it is blended, the second PS states,
 b, 1 - P_bb / pb0, P_bg / pb0; then the guard's c - 1, r(k-1), samples
-into the hold, y's last extreme, its direction, the reversals counted and
-the sample of the last]: all zero at rest, where g = 1, b = 0, c = 1 and
-the covariance is the prior's.
+into the hold, the last extreme, its direction, the reversals counted,
+the sample of the last, samples into the move and the direction of r's
+last step]: all zero at rest,
+where g = 1, b = 0, c = 1 and the covariance is the prior's.
 """
 
 import numba
@@ -46,9 +48,15 @@ from .inverse import _inverse_step
 NSCALAR = 21
 #: reversals of y in one hold that make the hunting guard scale down
 TURNS = 3
-#: the guard's state: c - 1, r(k-1), samples into the hold, y's last
-#: extreme, its direction, reversals counted, the sample of the last one
-NGUARD = 7
+#: reversals of the error in a row while the reference moves that do: a
+#: loop that tracks had at most 10 on the benchmark's drives (its error
+#: turns at the reference's own changes), one that oscillates hundreds
+MOTION_TURNS = 24
+#: the guard's state: c - 1, r(k-1), samples into the hold, the last
+#: extreme (of y in a hold, of the error in a move), its direction,
+#: reversals counted, the sample of the last one, samples into the move,
+#: the direction of r's last step
+NGUARD = 9
 
 
 def pack(feedback, pre, post, linear, sensitivity, other, scalars, preview,
@@ -178,29 +186,42 @@ def _guard(p, ix, s, r_now, yd):
     reversals by more than `hunt` from its last extreme are counted while
     each comes within gap / c samples of the one before (lower gains slow
     the loop down; the count restarts from 0 after a slower one), and each
-    `TURNS` of them multiply c by beta, down to floor (1 at rest)."""
+    `TURNS` of them multiply c by beta, down to floor (1 at rest); while
+    the reference moves, the error's reversals are counted the same way
+    from the move's first sample or r's last turn, and each
+    `MOTION_TURNS` of them do."""
     sc, i = ix[9], ix[18]
     if r_now != s[i + 1]:
         s[i + 2] = 0.0                  # a new hold starts
+        step = 1.0 if r_now > s[i + 1] else -1.0
+        if s[i + 7] == 0.0 or step != s[i + 8]:
+            # a move starts, or r turns (its own turns, or a reference
+            # that jitters, turn the error): count afresh
+            s[i + 3], s[i + 4], s[i + 5] = r_now - yd, 0.0, 0.0
+        s[i + 8] = step
+        s[i + 7] += 1.0
+        z, t, need = r_now - yd, s[i + 7], MOTION_TURNS
     else:
         s[i + 2] += 1.0
+        s[i + 7] = 0.0
+        z, t, need = yd, s[i + 2], TURNS
     s[i + 1] = r_now
-    if s[i + 2] < p[sc + _SETTLE]:
+    if s[i + 7] == 0.0 and s[i + 2] < p[sc + _SETTLE]:
         s[i + 3], s[i + 4], s[i + 5] = yd, 0.0, 0.0
     else:
-        move = yd - s[i + 3]
+        move = z - s[i + 3]
         if s[i + 4] * move > 0.0:
-            s[i + 3] = yd               # further the same way
+            s[i + 3] = z                # further the same way
         elif abs(move) > p[sc + _HUNT]:
             if s[i + 4] != 0.0:
-                if s[i + 2] - s[i + 6] <= p[sc + _GAP] / (1.0 + s[i]):
+                if t - s[i + 6] <= p[sc + _GAP] / (1.0 + s[i]):
                     s[i + 5] += 1.0
                 else:
                     s[i + 5] = 0.0
             s[i + 4] = 1.0 if move > 0.0 else -1.0
-            s[i + 3] = yd
-            s[i + 6] = s[i + 2]
-        if s[i + 5] >= TURNS:
+            s[i + 3] = z
+            s[i + 6] = t
+        if s[i + 5] >= need:
             c = (1.0 + s[i]) * p[sc + _BETA]
             if c < p[sc + _FLOOR]:
                 c = p[sc + _FLOOR]

@@ -65,7 +65,8 @@ three in quick succession (as fast as the loop's crossover: a load that
 friction holds and the integrator breaks free hunts more slowly, and lower
 gains would make that worse) by more than a deadband scale the error fed
 to the PID, and so its gains, by 0.6, down to 0.25 (``hunting``,
-``ctrl.feedback_gain``; the loop is checked stable down there). Scaling
+``ctrl.feedback_gain``; the loop is checked stable down there); while the
+reference moves, every 24 such reversals of the error r - y do. Scaling
 the error keeps the PID's states, so u does not jump.
 """
 
@@ -167,8 +168,9 @@ class ServoController(ct.NonlinearIOSystem):
     hunting : dict or None
         The hunting guard: 'deadband' (in y), 'settle' (samples into a
         hold before reversals count), 'gap' (most samples between
-        reversals counted in a row), 'beta' and 'floor' (each detection's
-        factor on the gains, and their least); None without it.
+        reversals counted in a row; in a move, of the error), 'beta' and
+        'floor' (each detection's factor on the gains, and their least);
+        None without it.
     notes : list of str
         Why each choice was made, as `repr` prints them.
     operating_point : tuple
@@ -418,10 +420,12 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     hunting : None, bool or float, optional
         The hunting guard: in a hold of the reference, every 3 reversals
         of y in a row by more than a deadband, each within 1.5 half-periods
-        of the loop's crossover of the last, scale the feedback's gains by
-        0.6, down to 0.25 (a heavy load that coasts into the play makes
-        a loop hunt that the record did not show; see the notes of
-        ``sandwichctl.design._servo_guard``). ``ctrl.feedback_gain``
+        of the loop's crossover of the last, and while the reference
+        moves one way every 24 such reversals of the error r - y, scale
+        the feedback's gains by 0.6, down to 0.25 (a heavy load that
+        coasts into the play makes a loop hunt that the record did not
+        show; see the notes of ``sandwichctl.design._servo_guard``).
+        ``ctrl.feedback_gain``
         reads the scale, ``reset()`` restores 1. By default (None) it
         runs for an identification result, with a deadband of 8 times
         its record's noise (``noise_level`` of
