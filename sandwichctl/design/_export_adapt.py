@@ -96,7 +96,8 @@ def guard_parts(w, sc):
         '        if (r_now != s->guard_r) {',
         f"            s->guard_n = {zero};",
         f"            step = r_now > s->guard_r ? {one} : -{one};",
-        f"            if (s->guard_move == {zero} || step != s->guard_step) {{",
+        f"            if (s->guard_move == {zero}"
+        " || step != s->guard_step) {",
         '                s->guard_ext = r_now - yd;',
         f"                s->guard_dir = {zero};",
         f"                s->guard_turns = {zero};",

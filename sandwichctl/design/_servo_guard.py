@@ -21,8 +21,8 @@ restores them.
 A loop can also oscillate while the reference moves, where y has no
 rest to reverse about: random drive 0 of the benchmark with 1.5 times the
 play, whose sandwich design did not hunt in the holds before its sine
-and then oscillated through the whole sine at 67 um RMS (the linear
-design, whose guard had fired in the first hold, tracked it at 10 um).
+and then oscillated through the whole sine at 68 um RMS (the linear
+design, whose guard had fired in the first hold, tracked at 9.8 um).
 While r moves the guard counts the reversals of the error r - y instead,
 by the same deadband and window, and scales the gains after every
 `MOTION_TURNS` (24) of them in a row: a loop that tracks turns its error
