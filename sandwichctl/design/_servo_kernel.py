@@ -33,8 +33,8 @@ other feedforward's states, and when it is blended, the second PS states,
 b, 1 - P_bb / pb0, P_bg / pb0; then the guard's c - 1, r(k-1), samples
 into the hold, the last extreme, its direction, the reversals counted,
 the sample of the last, samples into the move and the direction of r's
-last step]: all zero at rest,
-where g = 1, b = 0, c = 1 and the covariance is the prior's.
+last step]: all zero at rest, where g = 1, b = 0, c = 1 and the
+covariance is the prior's.
 """
 
 import numba
@@ -49,7 +49,7 @@ NSCALAR = 21
 #: reversals of y in one hold that make the hunting guard scale down
 TURNS = 3
 #: reversals of the error in a row while the reference moves that do: a
-#: loop that tracks had at most 10 on the benchmark's drives (its error
+#: loop that tracks had at most 12 on the benchmark's drives (its error
 #: turns at the reference's own changes), one that oscillates hundreds
 MOTION_TURNS = 24
 #: the guard's state: c - 1, r(k-1), samples into the hold, the last
@@ -193,14 +193,15 @@ def _guard(p, ix, s, r_now, yd):
     sc, i = ix[9], ix[18]
     if r_now != s[i + 1]:
         s[i + 2] = 0.0                  # a new hold starts
+        z = r_now - yd
         step = 1.0 if r_now > s[i + 1] else -1.0
         if s[i + 7] == 0.0 or step != s[i + 8]:
             # a move starts, or r turns (its own turns, or a reference
             # that jitters, turn the error): count afresh
-            s[i + 3], s[i + 4], s[i + 5] = r_now - yd, 0.0, 0.0
+            s[i + 3], s[i + 4], s[i + 5] = z, 0.0, 0.0
         s[i + 8] = step
         s[i + 7] += 1.0
-        z, t, need = r_now - yd, s[i + 7], MOTION_TURNS
+        t, need = s[i + 7], MOTION_TURNS
     else:
         s[i + 2] += 1.0
         s[i + 7] = 0.0

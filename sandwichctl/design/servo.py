@@ -55,8 +55,8 @@ model's feedforward (the baseline's or the sandwich's) is estimated with
 it. Both are deterministic and bounded, and ``reset()`` restarts them
 (``adapt``).
 
-Hunting in the holds: online
-----------------------------
+Hunting: online
+---------------
 A heavy load with little friction coasts into the play, and a loop whose
 gains suit the identified model can then hunt in the holds, although
 the record (whose excitation keeps the load moving) showed nothing. The
@@ -425,10 +425,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         the feedback's gains by 0.6, down to 0.25 (a heavy load that
         coasts into the play makes a loop hunt that the record did not
         show; see the notes of ``sandwichctl.design._servo_guard``).
-        ``ctrl.feedback_gain``
-        reads the scale, ``reset()`` restores 1. By default (None) it
-        runs for an identification result, with a deadband of 8 times
-        its record's noise (``noise_level`` of
+        ``ctrl.feedback_gain`` reads the scale, ``reset()`` restores 1.
+        By default (None) it runs for an identification result, with a
+        deadband of 8 times its record's noise (``noise_level`` of
         ``sandwichctl.tools.residuals``); True asks for it (an error
         without a record), False turns it off, and a number is the
         deadband in y's units.
