@@ -25,6 +25,7 @@ import pytest
 
 import sandwichctl as sw
 from sandwichctl.design.loop import servo_loop
+from sandwichctl.design._servo_kernel import EARLY
 
 GCC = shutil.which('gcc')
 FLAGS = ['-std=c99', '-Wall', '-Wextra', '-Werror', '-pedantic', '-O2',
@@ -254,6 +255,21 @@ def test_the_hunting_guard_steps_the_same_in_c(built):
     _, y, _ = _loop(model, ctrl)
     moving = np.r_[False, np.diff(r_ahead) != 0]
     y = y + 0.2 * moving * np.sign(np.sin(np.arange(y.size) / 3.0))
+    u_py = _python(ctrl, r_ahead, y)
+    assert ctrl.feedback_gain < 1.0
+    u_c = CStep(lib, 'guarded_d', 'double').run(r_ahead, y)
+    np.testing.assert_array_equal(u_c, u_py)
+    # ... and y swinging only in the holds' early windows (from EARLY
+    # settle samples in, before the settle)
+    _, y, _ = _loop(model, ctrl)
+    r_now = np.r_[np.zeros(ctrl.preview), r_ahead][:r_ahead.size]
+    held, t, last = np.zeros(y.size), 0, 0.0     # r(-1) is taken as 0
+    for k, r in enumerate(r_now):
+        t, last = (t + 1 if r == last else 0), r
+        held[k] = t
+    settle = ctrl.hunting['settle']
+    early = (held >= EARLY * settle) & (held < settle - 1)
+    y = y + 0.2 * early * np.sign(np.sin(np.arange(y.size) / 3.0))
     u_py = _python(ctrl, r_ahead, y)
     assert ctrl.feedback_gain < 1.0
     u_c = CStep(lib, 'guarded_d', 'double').run(r_ahead, y)

@@ -12,7 +12,7 @@ import pytest
 
 import sandwichctl as sw
 from sandwichctl.design import _servo_guard as sg
-from sandwichctl.design._servo_kernel import MOTION_TURNS
+from sandwichctl.design._servo_kernel import EARLY, MOTION_TURNS
 from sandwichctl.tools.residuals import noise_level
 
 PLANT = ct.tf([0.02, 0.01], np.polymul([1, -0.95], [1, -0.6]), 1e-3)
@@ -48,12 +48,12 @@ def test_every_three_reversals_in_a_hold_scale_the_gains():
         assert ctrl.feedback_gain == pytest.approx(gain)
     ctrl.reset()
     assert ctrl.feedback_gain == 1.0
-    # swings inside the deadband, or before the loop has settled, are not
-    # hunting
+    # swings inside the deadband, or before the early window (the step's
+    # overshoot), are not hunting
     ctrl.run(*_hold_then_swing(ctrl, 0.04, 30))
     ctrl.reset()
     ctrl.run(*_hold_then_swing(ctrl, 0.2, 8, period=3, start=0))
-    assert int(ctrl.hunting['settle']) > 30
+    assert EARLY * ctrl.hunting['settle'] > 8 * 3 + 1
     assert ctrl.feedback_gain == 1.0
     # while the reference moves, it takes MOTION_TURNS reversals of the
     # error in a row (a tracking loop's error turns with the reference)
@@ -100,6 +100,34 @@ def test_every_three_reversals_in_a_hold_scale_the_gains():
         ctrl.reset()
         ctrl.run(np.zeros(y.size), y)
         assert ctrl.feedback_gain == pytest.approx(gain)
+
+
+def _marks(times, n):
+    """A hold at 0 where y steps between +-0.2 at the given samples."""
+    y = np.zeros(n)
+    for j, t in enumerate(times):
+        y[t:] = 0.2 * (-1) ** j
+    return np.zeros(n), y
+
+
+def test_an_early_window_catches_a_hunt_that_starts_with_the_hold():
+    # random drive 72's linear design hunts from a hold's start; from EARLY
+    # settle samples in, 3 reversals in a row scale the gains before the
+    # settle, and that window's count is dropped at the settle
+    ctrl = _guarded()
+    settle = int(ctrl.hunting['settle'])
+    early = int(np.ceil(EARLY * settle))     # sample k is t = k + 1 in
+    n = settle + 60
+    fast = [early, early + 6, early + 12]
+    later = [settle + 4, settle + 10, settle + 16, settle + 22]
+    assert early + 18 < settle - 2 and settle + 4 - (early + 12) < 32
+    for times, gain in ((fast + [early + 18], 0.6),     # 3 in the window
+                        ([t - 6 for t in fast], 1.0),   # 2 of them in it
+                        (fast + later[:2], 1.0),        # dropped: 2, then 1
+                        (fast + later, 0.6)):           # 3 after the settle
+        ctrl.reset()
+        ctrl.run(*_marks(times, n))
+        assert ctrl.feedback_gain == pytest.approx(gain), times
 
 
 def test_the_guard_scales_the_error_so_the_input_does_not_jump():

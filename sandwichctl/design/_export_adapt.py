@@ -3,7 +3,7 @@ band's gain and the blend of its two linear feedforwards (the Python
 kernel is `_servo_kernel._blend`) and the hunting guard's scale on the
 feedback (`_servo_kernel._guard`), operation for operation."""
 
-from ._servo_kernel import MOTION_TURNS, TURNS
+from ._servo_kernel import EARLY, MOTION_TURNS, TURNS
 
 
 def blend_body(w, ps, lin, oth):
@@ -83,7 +83,8 @@ def guard_parts(w, sc):
               'a move, scale the feedback down. */',
               w.const('hunt', sc['hunt'], 'deadband of a reversal'),
               w.const('settle', sc['settle'], 'samples into a hold before '
-                      'reversals count'),
+                      'reversals count (and from half of it, in an early '
+                      'window)'),
               w.const('beta', sc['beta'], 'factor on the scale per '
                       f'{TURNS} reversals in a hold, {MOTION_TURNS} in a '
                       'move'),
@@ -115,7 +116,9 @@ def guard_parts(w, sc):
         f"            need = {w.num(TURNS)};",
         '        }',
         '        s->guard_r = r_now;',
-        f"        if (s->guard_move == {zero} && s->guard_n < {n}_settle) {{",
+        f"        if (s->guard_move == {zero}"
+        f" && (s->guard_n < {w.num(EARLY)} * {n}_settle",
+        f"            || s->guard_n == {n}_settle - {one})) {{",
         '            s->guard_ext = yd;',
         f"            s->guard_dir = {zero};",
         f"            s->guard_turns = {zero};",

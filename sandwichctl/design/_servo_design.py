@@ -16,12 +16,11 @@ anticausal series :math:`1/(z - z_j) = -\sum_{i \ge 0} z^i / z_j^{i+1}`
 truncated where :math:`|z_j|^{-i}` falls below 1e-3 (a preview of that
 many samples), scaled for a unit DC gain of :math:`N_u Q`. Zeros with a
 real part below -0.5 (which would make the inverse ring at the Nyquist
-frequency) are counted in :math:`N_u` too. With
-``'zpetc'``, Tomizuka's zero-phase error tracking controller,
-:math:`Q = N_u(z^{-1}) / N_u(1)^2`. Zeros whose series would need more
-than `max_preview` samples (at or near the unit circle) keep only their
-DC gain. d makes F causal, so :math:`G F \approx z^{-d}`: the reference
-is needed d samples ahead.
+frequency) are counted in :math:`N_u` too. With ``'zpetc'``, Tomizuka's
+zero-phase error tracking controller, :math:`Q = N_u(z^{-1}) / N_u(1)^2`.
+Zeros whose series would need more than `max_preview` samples (at or
+near the unit circle) keep only their DC gain. d makes F causal, so
+:math:`G F \approx z^{-d}`: the reference is needed d samples ahead.
 
 PID gains
 ---------
@@ -47,6 +46,7 @@ import control as ct
 
 from ..model.sandwich import SandwichSystem
 from .inverse import _fmt_roots
+from ._servo_kernel import ADAPT, BLEND
 from .references import servo_reference
 
 #: a zero this close to the unit circle or outside counts as unstable
@@ -551,7 +551,7 @@ def band_adaptation(adapt, num, den, C, post, band_x, share, exact,
         return None
     ps, lam, p0 = got
     most = min(ADAPT_MOST, 1.0 / share)
-    scal[8:12] = [lam, p0, ADAPT_WINDUP * p0, most]
+    scal[ADAPT] = [lam, p0, ADAPT_WINDUP * p0, most]
     notes.append(
         f"the band's gain is estimated online from the loop's own error "
         f"(recursive least squares, memory {ADAPT_MEMORY} samples), from 1 "
@@ -617,7 +617,7 @@ def blend(ps, other, chosen, model, dt, scal, notes):
     energy = float(np.sum(phi ** 2))
     if not np.isfinite(energy) or energy <= 0:
         return False
-    scal[12:14] = [1.0 / energy, ADAPT_WINDUP / energy]
+    scal[BLEND] = [1.0 / energy, ADAPT_WINDUP / energy]
     notes.append("the linear feedforward's share of the other model (the "
                  "baseline or the sandwich's mbar L1 L2) is estimated "
                  "online too, from 0 within [0, 1]")

@@ -45,7 +45,7 @@ import numpy as np
 from .compensator import SandwichCompensator
 from .servo import ServoController
 from ._export_adapt import blend_body, guard_parts
-from ._servo_kernel import NSCALAR
+from ._servo_kernel import NSCALAR, SCALARS
 from ..model.sandwich import SandwichSystem
 
 __all__ = ['export_c']
@@ -61,11 +61,6 @@ _C_KEYWORDS = frozenset(
     'extern float for goto if inline int long register restrict return '
     'short signed sizeof static struct switch typedef union unsigned void '
     'volatile while _Bool _Complex _Imaginary'.split())
-
-#: names of the scalars in the packed parameters (see _servo_kernel)
-_SCALARS = ('m1', 'm2', 'D1', 'D2', 'width', 'mbar', 'rate', 'alpha', 'lam',
-            'p0', 'pmax', 'gmax', 'pb0', 'pbmax', 'hunt', 'settle', 'beta',
-            'floor', 'gap', 'u0', 'y0')
 
 
 #: longest name: file names stop at 255 bytes on most file systems
@@ -340,7 +335,7 @@ def _servo_parts(ctrl, w):
     p, ix = ctrl._p, ctrl._ix
     preview, lead = int(ix[0]), int(ix[1])
     compensate = bool(ix[5])
-    sc = dict(zip(_SCALARS, p[int(ix[9]):int(ix[9]) + NSCALAR]))
+    sc = dict(zip(SCALARS, p[int(ix[9]):int(ix[9]) + NSCALAR]))
     fb = _Block.packed('fb', 'feedback C(z), error r(k) - y(k) -> u_fb',
                        p, int(ix[6]), int(ix[2]))
     pre = _Block.packed('pre', 'pre-inverse, r_ahead -> w (the backlash '

@@ -82,7 +82,7 @@ from . import _servo_band as sb
 from ._servo_guard import guard_scalars
 from ._servo_inputs import check_plant_tf, unwrap_model
 from ._servo_kernel import (pack, servo_step, servo_run, adapt_index,
-                            NSCALAR)
+                            rest_scalars, BAND, GUARD, INVERSE, NSCALAR)
 from .loop import servo_loop, ss_arrays
 from ..model.sandwich import SandwichSystem
 from .._checks import (MAX_ORDER, PLAIN_REALS, check_finite,
@@ -167,7 +167,8 @@ class ServoController(ct.NonlinearIOSystem):
         Whether a backlash inverse runs in the feedforward.
     hunting : dict or None
         The hunting guard: 'deadband' (in y), 'settle' (samples into a
-        hold before reversals count), 'gap' (most samples between
+        hold before reversals count; from half of it they count in an
+        early window, dropped at the settle), 'gap' (most samples between
         reversals counted in a row; in a move, of the error), 'beta' and
         'floor' (each detection's factor on the gains, and their least);
         None without it.
@@ -567,7 +568,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     pre = post = zero
     lead, jump, band_fraction_out, smoothing_out = 0, 0, 0.0, 0.0
     ps, adapts = zero, False
-    scal = [1, 1, 0, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, u0, y0]
+    scal = rest_scalars(u0, y0)
     other, other_inv, blends = zero, None, False
     if feedforward is None:
         preview, lin_ff = 0, zero
@@ -652,10 +653,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         # the exact inverse keeps both slopes; the band offset alone (the
         # linear feedforward carries the mean slope) uses the mean one
         slopes = (co['m1'], co['m2']) if exact else (mbar, mbar)
-        scal = [*slopes, band_fraction_out * co['D1'],
-                band_fraction_out * co['D2'], smoothing_out, mbar,
-                band_x / jump if jump > 1 else 0.0, float(exact), 1, 0, 0,
-                1, 0, 0, 0, 0, 0, 0, 0, u0, y0]
+        scal[INVERSE] = [*slopes, band_fraction_out * co['D1'],
+                         band_fraction_out * co['D2'], smoothing_out, mbar,
+                         band_x / jump if jump > 1 else 0.0, float(exact)]
         got = sd.band_adaptation(adapt, num, den, C, post, band_x,
                                  band_fraction_out, exact, band_by_default,
                                  scal, notes)
@@ -680,13 +680,13 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     if feedforward is not None:
         lin_ff = _ss(fn, fd, dt)
     band_fraction, smoothing = band_fraction_out, smoothing_out
-    scal[14:19] = guard_scalars(hunting, result, num, den, C, notes)
+    scal[GUARD] = guard_scalars(hunting, result, num, den, C, notes)
     design.update(preview=int(preview), band_fraction=float(band_fraction),
                   smoothing=float(smoothing), jump_samples=int(jump),
                   compensates=bool(comp), adapts=bool(adapts), _ps=ps,
                   hunting=(dict(zip(('deadband', 'settle', 'beta', 'floor',
-                                     'gap'), scal[14:19]))
-                           if scal[14] else None),
+                                     'gap'), scal[GUARD]))
+                           if scal[GUARD][0] else None),
                   blends=bool(blends), _other=other,
                   notes=notes, _pre=pre, _post=post,
                   _linear=lin_ff,
@@ -702,10 +702,11 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     if checked and band_by_default and band_fraction > 0 and \
             not _helps_on_model(ctrl, model, r):
         # the compensation must at least help on the model it came from
-        ctrl._p[_scalar_index(ctrl) + 2:_scalar_index(ctrl) + 4] = 0.0
+        sc = _scalar_index(ctrl)
+        ctrl._p[sc + BAND.start:sc + BAND.stop] = 0.0
         ctrl.band_fraction = 0.0
         ctrl._design['band_fraction'] = 0.0
-        ctrl._design['_scalars'][2:4] = 0.0
+        ctrl._design['_scalars'][BAND] = 0.0
         ctrl._ix[14] = ctrl._ix[17] = 0
         ctrl.adapts = ctrl._design['adapts'] = False
         ctrl.blends = ctrl._design['blends'] = False
