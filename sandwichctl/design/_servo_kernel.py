@@ -60,6 +60,23 @@ ADAPT = slice(_LAM, _GMAX + 1)
 BLEND = slice(_PB0, _PBMAX + 1)
 GUARD = slice(_HUNT, _GAP + 1)
 
+#: reversals of y in one hold that make the hunting guard scale down
+TURNS = 3
+#: reversals of the error in a row while the reference moves that do: a
+#: loop that tracks had at most 12 on the benchmark's drives (its error
+#: turns at the reference's own changes), one that oscillates hundreds
+MOTION_TURNS = 24
+#: a hold's reversals are also counted in an early window, from this share
+#: of the guard's settle on, and that count is dropped just before the
+#: settle (a loop can hunt from a hold's start; see the notes of
+#: `_servo_guard`)
+EARLY = 0.5
+#: the guard's state: c - 1, r(k-1), samples into the hold, the last
+#: extreme (of y in a hold, of the error in a move), its direction,
+#: reversals counted, the sample of the last one, samples into the move,
+#: the direction of r's last step
+NGUARD = 9
+
 
 def rest_scalars(u0, y0):
     """The scalars of a design that compensates, estimates and guards
@@ -69,25 +86,6 @@ def rest_scalars(u0, y0):
     values.update(m1=1.0, m2=1.0, mbar=1.0, lam=1.0, gmax=1.0,
                   u0=float(u0), y0=float(y0))
     return [values[name] for name in SCALARS]
-#: reversals of y in one hold that make the hunting guard scale down
-TURNS = 3
-#: reversals of the error in a row while the reference moves that do: a
-#: loop that tracks had at most 12 on the benchmark's drives (its error
-#: turns at the reference's own changes), one that oscillates hundreds
-MOTION_TURNS = 24
-#: a hold's reversals are also counted in an early window, from this share
-#: of the guard's settle on, and that count is dropped just before the
-#: settle (10 time constants alone missed random drive 72's linear design:
-#: it hunts from the hold's start, about one time constant per swing, and
-#: the guard fired only in the hold's second half; counting on from 5
-#: time constants, without the drop, fired on random drive 9's sandwich,
-#: whose loop does not hunt, at a 35 % higher error near the reversals)
-EARLY = 0.5
-#: the guard's state: c - 1, r(k-1), samples into the hold, the last
-#: extreme (of y in a hold, of the error in a move), its direction,
-#: reversals counted, the sample of the last one, samples into the move,
-#: the direction of r's last step
-NGUARD = 9
 
 
 def pack(feedback, pre, post, linear, sensitivity, other, scalars, preview,
@@ -216,8 +214,9 @@ def _guard(p, ix, s, r_now, yd):
     of the reference (r(k) = r(k-1)), from `settle` samples into it (and
     in an early window from `EARLY` settle samples on, whose count is
     dropped at settle - 1), y's reversals by more than `hunt` from its
-    last extreme are counted while each comes within gap / c samples of the one before (lower gains slow
-    the loop down; the count restarts from 0 after a slower one), and each
+    last extreme are counted while each comes within gap / c samples of
+    the one before (lower gains slow the loop down; the count restarts
+    from 0 after a slower one), and each
     `TURNS` of them multiply c by beta, down to floor (1 at rest); while
     the reference moves, the error's reversals are counted the same way
     from the move's first sample or r's last turn, and each
