@@ -49,7 +49,8 @@ SCALARS = ('m1', 'm2', 'D1', 'D2', 'width', 'mbar', 'rate', 'alpha', 'lam',
            'floor', 'gap', 'u0', 'y0')
 #: index of each scalar in the scalar part of p
 (_M1, _M2, _D1, _D2, _WIDTH, _MBAR, _RATE, _ALPHA, _LAM, _P0, _PMAX, _GMAX,
- _PB0, _PBMAX, _HUNT, _SETTLE, _BETA, _FLOOR, _GAP, _U0, _Y0) = range(21)
+ _PB0, _PBMAX, _HUNT, _SETTLE, _BETA, _FLOOR, _GAP, _U0,
+ _Y0) = range(len(SCALARS))
 NSCALAR = len(SCALARS)
 #: the stretches of scalars that one part of the design writes: the backlash
 #: inverse, the compensated band alone, the band gain's estimate, the
@@ -216,11 +217,10 @@ def _guard(p, ix, s, r_now, yd):
     dropped at settle - 1), y's reversals by more than `hunt` from its
     last extreme are counted while each comes within gap / c samples of
     the one before (lower gains slow the loop down; the count restarts
-    from 0 after a slower one), and each
-    `TURNS` of them multiply c by beta, down to floor (1 at rest); while
-    the reference moves, the error's reversals are counted the same way
-    from the move's first sample or r's last turn, and each
-    `MOTION_TURNS` of them do."""
+    from 0 after a slower one), and each `TURNS` of them multiply c by
+    beta, down to floor (1 at rest); while the reference moves, the
+    error's reversals are counted the same way from the move's first
+    sample or r's last turn, and each `MOTION_TURNS` of them do."""
     sc, i = ix[9], ix[18]
     if r_now != s[i + 1]:
         s[i + 2] = 0.0                  # a new hold starts
