@@ -138,7 +138,9 @@ def test_two_models_of_one_record_get_alike_pd_gains():
     # the PD of either model (its margins read on it and on the measured
     # response): refined around the best coarse candidate alone, the
     # first got kp 6.0e4 with kd 7.9e4 and the second kp 5.3e4 with kd 0;
-    # the largest kp lies between points of the coarse grid
+    # the largest kp lies between points of the coarse grid. The ridge of
+    # the largest kp over kd is flat at its top (kp 6.07e4 at kd 8.7e4
+    # against 6.03e4 at 7.8e4), so kd is held less tightly than kp
     gains = []
     for plant, fit, re, im, se in TWIN_FITS:
         base = ct.tf(*_twin(fit), 0.0007210124972624851)
@@ -151,7 +153,7 @@ def test_two_models_of_one_record_get_alike_pd_gains():
     (kp1, ki1, kd1, p1), (kp2, ki2, kd2, p2) = gains
     assert ki1 == ki2 == 0 and p1 == p2
     assert kd1 > 0 and kd2 > 0
-    assert abs(kp1 / kp2 - 1) < 0.02 and abs(kd1 / kd2 - 1) < 0.1
+    assert abs(kp1 / kp2 - 1) < 0.02 and abs(kd1 / kd2 - 1) < 0.15
 
 
 def test_tracking_controller_raises_instead_of_an_unstable_loop():
@@ -648,6 +650,50 @@ def test_a_far_zero_outside_does_not_block_the_sandwich_feedforward(
     assert f"feedforward inverts the {source}" in " ".join(ctrl.notes)
 
 
+#: random drive 76's baseline (benchmarks/bench_servo.py, a speed loop
+#: with 184 um of play), whose largest kp lies at the flat top of a ridge
+#: over kd that the coarse grid ties
+DRIVE_76 = ([-2.905994149918111e-07, 7.812475483018372e-07,
+             -4.830261339198816e-07, 0.0],
+            [1.0, -3.227987830329673, 3.8263265354959097,
+             -1.9641335112885197, 0.36579480612228293], 0.0010500377279254996)
+
+
+def test_the_pd_reaches_the_largest_kp_of_a_fine_scan():
+    """The PD of an integrating plant has (nearly) the largest kp that
+    meets its constraints with a stable loop, as a scan of 61 kd by 400
+    kp (1 % apart) finds it: refined around the best coarse candidates
+    alone, it stopped at 0.97 times that on this plant (kp 6.52e4 with
+    kd 8.4e4, where a finer scan finds 6.73e4 with 1.0e5)."""
+    from sandwichctl.design import _servo_design as sd
+    num, den, dt = (np.array(DRIVE_76[0]), np.array(DRIVE_76[1]),
+                    DRIVE_76[2])
+    kp, ki, kd, pole = sd.design_pid(num, den, dt, 0.6)
+    assert ki == 0
+    num = sd.low_frequency_sign(num, den) * num
+    w = sd.frequency_grid(den)
+    z = np.exp(1j * w)
+    P = np.polyval(num, z) / np.polyval(den, z)
+    high = w > sd.bandwidth(num, den, w)
+    D = (z - 1) / z                          # derivative pole 0
+    kps = kp * np.logspace(-0.5, 0.5, 400)
+    best = 0.0
+    for d in np.r_[0.0, kp * np.logspace(-1, 1, 60)]:
+        a = 1 + (kps[:, None] + d * D[None, :]) * P[None, :]
+        ok = ((2 * d <= sd.DERIVATIVE_BOOST * kps)
+              & np.all(np.abs(a) >= 1.005 * 0.6, axis=1)
+              & np.all(np.abs(a[:, high] - 1) <= 1, axis=1))
+        for k in kps[ok][::-1]:
+            if k <= best:
+                break
+            C = sd.pid_tf(k, 0.0, d, 0.0, dt)
+            if sd.loop_radius(num, den, C) < 1 and \
+                    sd._unconditional(num, den, C, w):
+                best = k
+                break
+    assert kp >= 0.99 * best and kd > 0
+
+
 def test_integrating_plants_that_differ_little_get_gains_that_differ_little(
         monkeypatch):
     """The PD of an integrating plant is refined on a fine grid: over a
@@ -686,7 +732,7 @@ def test_a_drift_term_is_cancelled_before_the_design():
                          (1 - 1e-7, 1 - 2e-7)):
         den2 = np.polymul(np.polymul([1, -1], [1, -second]), [1, -0.3])
         P2 = ct.tf(np.polymul([0.02, 0.01], [1, -zero]), den2, 1e-3)
-        left, at = sw.design._servo_design.cancel_unit_pair(P2)
+        left, at = sw.design._servo_linear.cancel_unit_pair(P2)
         assert at == pytest.approx(zero, abs=1e-8)
         poles = left.poles()
         assert poles.size == 2 and np.sum(np.abs(poles - 1) < 1e-6) == 1
@@ -696,7 +742,7 @@ def test_a_drift_term_is_cancelled_before_the_design():
     # three poles near 1 are no pair
     den3 = np.polymul(np.polymul([1, -1], [1, -0.99999]), [1, -0.99998])
     P3 = ct.tf(np.polymul([0.02, 0.01], [1, -1.00001]), den3, 1e-3)
-    assert sw.design._servo_design.cancel_unit_pair(P3)[1] is None
+    assert sw.design._servo_linear.cancel_unit_pair(P3)[1] is None
     # in L2 with no delay too (its static inverse stays proper)
     plant = sw.examples.paper_plant(dt=1e-3)
     L2 = ct.tf([1, -1.00001], [1, -1], 1e-3) * ct.tf([1, 0], [1, -0.5], 1e-3)

@@ -44,7 +44,6 @@ loop is never returned.
 import numpy as np
 import control as ct
 
-from ..model.sandwich import SandwichSystem
 from .inverse import _fmt_roots
 from ._servo_kernel import ADAPT, BLEND
 from .references import servo_reference
@@ -223,20 +222,23 @@ CROSSOVER_LIMIT = {'pid': 3.0, 'pd': 1.0}
 REFINE = 8
 
 #: the refinement of a PD starts from the best coarse candidate and from
-#: the next best ones of other derivatives (kd two or more points apart on
-#: the coarse grid, or another pole), at most REFINE_STARTS in all, down to
-#: a kp STEP_BELOW times the best's. From the best alone, two baselines of
-#: one record (random drive 40 of benchmarks/bench_servo.py, speed loop,
-#: no play) got kp 6.0e4 with kd 7.9e4 and kp 5.3e4 with kd 0, and the
-#: second tracked the reversals 1.11 times worse. With these starts and a
-#: kd grid twice as fine the sandwich's error near reversals is at worst
-#: 0.96, 0.96 and 1.00 times the linear design's on the three sets (0.96,
-#: 1.01 and 1.11 before), and one more run of a drive that differs from
-#: the one identified hunts (random drive 0 with 1.5 times the play, both
-#: designs, which hunt there under the heavier load and the stiffer loop
-#: already)
+#: the tops of the ridge of the largest kp over kd: for each kd of the
+#: coarse grid (and each pole), the largest kp that meets the constraints,
+#: found by bisection to RIDGE_STEPS steps per step of the coarse kp grid
+#: (0.6 %), from a kp STEP_BELOW times below the best's to two coarse steps
+#: above it; at most REFINE_STARTS starts, kd two or more coarse points
+#: apart or another pole. The ridge is flat at its top, and a coarse grid
+#: ties many kd there: starting from the best coarse candidates instead
+#: (random drive 40 of benchmarks/bench_servo.py, speed loop, no play: two
+#: baselines of one record got kp 6.0e4 with kd 7.9e4 and kp 5.3e4 with kd
+#: 0) left random drive 76's two models of one record at kp 4.7e4 with kd
+#: 0 and kp 5.4e4 with kd 6.3e4 (both reach 5.4e4 with kd 6.8e4 and 7.0e4
+#: now); on eight integrating plants it ended 0.969 to 1.017 times the
+#: largest kp that a scan of 301 kd by 1,400 kp (2.3 % apart) finds, and
+#: now 0.994 to 1.021 times
 REFINE_STARTS = 6
 STEP_BELOW = 1.5
+RIDGE_STEPS = 32
 
 #: a raised PID may cross over up to where the residuals vouch for the
 #: model (`_servo_data.trusted_band`), at most RAISE_CROSSOVER plant
@@ -354,23 +356,49 @@ def design_pid(num, den, dt, modulus_margin, limit=None, measured=None,
     high = wc > limit * wb
     I = zc / (zc - 1)
 
+    def one_plus(pole, KP, KD):
+        """1 + C P of the PDs (KP, KD) with the pole, a row each."""
+        D = (1 - pole) * (zc - 1) / (zc - pole)
+        return 1 + (KP[:, None] + KD[:, None] * D[None, :]) * P[None, :]
+
+    def meets(a):
+        """Whether each row of 1 + C P meets the PD's constraints."""
+        return (np.all(np.abs(a) >= 1.005 * modulus_margin, axis=1)
+                & np.all(np.abs(a[:, high] - 1) <= 1, axis=1))
+
     def grid(pole, kp, kd):
         """Candidates (kp, ki, kd, pole) on the grid kp x kd: the PIDs
         with their largest ki, and the PDs (ki = 0) that meet both
         constraints."""
-        D = (1 - pole) * (zc - 1) / (zc - pole)
         KP, KD = (g.ravel() for g in np.meshgrid(kp, kd))
         boost = KD * (1 - pole) * 2 / (1 + pole) <= DERIVATIVE_BOOST * KP
         KP, KD = KP[boost], KD[boost]
-        a = 1 + (KP[:, None] + KD[:, None] * D[None, :]) * P[None, :]
+        a = one_plus(pole, KP, KD)
         b = I[None, :] * P[None, :]
         ki = _ki_max(a, b, 1.005 * modulus_margin, high)
         keep = np.isfinite(ki) & (ki > 0)
-        pd = (np.all(np.abs(a) >= 1.005 * modulus_margin, axis=1)
-              & np.all(np.abs(a[:, high] - 1) <= 1, axis=1))
+        pd = meets(a)
         return ([(p_, k, d, pole) for p_, k, d in
                  zip(KP[keep], ki[keep], KD[keep])],
                 [(p_, 0.0, d, pole) for p_, d in zip(KP[pd], KD[pd])])
+
+    def ridge(pole, kds, lo, step, n):
+        """For each kd of kds, the largest kp of lo * step**j (j = 0..n)
+        that meets the PD's constraints, by bisection from the least
+        that the derivative's boost allows (where that one meets them):
+        PD candidates (kp, 0, kd, pole)."""
+        least = kds * (1 - pole) * 2 / (1 + pole) / DERIVATIVE_BOOST
+        low = np.clip(np.ceil(np.log(np.maximum(least, lo) / lo)
+                              / np.log(step) - 1e-9), 0, n + 1).astype(int)
+        ok = (low <= n) & meets(one_plus(pole, lo * step ** np.minimum(
+            low, n), kds))
+        up = np.full(kds.size, n + 1)
+        while np.any(up - low > 1):
+            mid = (low + up) // 2
+            good = meets(one_plus(pole, lo * step ** mid, kds))
+            low, up = np.where(good, mid, low), np.where(good, up, mid)
+        return [(lo * step ** j, 0.0, d, pole)
+                for j, d in zip(low[ok], kds[ok])]
 
     def first(found):
         """The first candidate whose loop is stable, and unconditionally
@@ -399,19 +427,23 @@ def design_pid(num, den, dt, modulus_margin, limit=None, measured=None,
         # models that fit alike get alike gains, not the next points of a
         # coarse grid (a PID is not: a larger ki than the coarse grid's
         # made the position drives of benchmarks/bench_servo.py ring
-        # longer in their holds); and around the best of other
-        # derivatives (REFINE_STARTS), where the largest kp can lie
-        # between the points of the coarse grid
+        # longer in their holds); and around the tops of the ridge of the
+        # largest kp over kd (REFINE_STARTS, RIDGE_STEPS), which the
+        # coarse grid sees only to within its step
         index = {d: i for i, d in enumerate(kd_grid)}
-        starts = [best]
+        starts, ratio = [best], kp_grid[1] / kp_grid[0]
+        if REFINE:
+            n = int(np.ceil(RIDGE_STEPS * np.log(ratio ** 2 * STEP_BELOW)
+                            / np.log(ratio)))
+            found = [c for pole in (0.0, 0.5, 0.8)
+                     for c in ridge(pole, kd_grid, best[0] / STEP_BELOW,
+                                    ratio ** (1 / RIDGE_STEPS), n)]
         for c in sorted(found, key=lambda c: -c[0]):
             if len(starts) == REFINE_STARTS or c[0] < best[0] / STEP_BELOW:
                 break
-            # (those above the best's kp failed `first`); a start's
-            # neighbours in kd are refined with it
-            if c[0] <= best[0] and all(
-                    s[3] != c[3] or abs(index[s[2]] - index[c[2]]) > 1
-                    for s in starts):
+            # a start's neighbours in kd are refined with it
+            if all(s[3] != c[3] or abs(index[s[2]] - index[c[2]]) > 1
+                   for s in starts):
                 starts.append(c)
         fine = np.linspace(-1.0, 1.0, 2 * REFINE + 1)
         for kp, _, kd, pole in starts:
@@ -624,177 +656,7 @@ def blend(ps, other, chosen, model, dt, scal, notes):
     return True
 
 
-#: the sandwich's linear part drives the feedforward of a non-integrating
-#: axis when the sandwich fits this many points better than the linear
-#: baseline: the play then distorts the baseline's dynamics
-MODEL_FF_GAP = 2.0
-
-
-def outside(zeros, max_preview):
-    """Which zeros lie outside the unit circle where the preview inverse
-    can keep only their DC gain (sampling zeros on the negative real axis
-    it may keep so)."""
-    return np.array([abs(zj) >= 1 and np.real(zj) >= RINGING
-                     and series_length(zj) > max_preview
-                     for zj in zeros], bool)
-
-
-def feedforward_source(choice, result, integrating, zeros, max_preview):
-    """Whether the feedforward inverts the sandwich's own mbar L1 L2
-    (else the linear baseline), and why (`choice` is 'auto', 'model' or
-    'baseline'; there is a baseline)."""
-    if choice != 'auto':
-        return choice == 'model', "as asked"
-    gap = result.fit - result.linear['fit']
-    # zeros outside the unit circle that the preview inverse can only
-    # keep by their DC gain (sampling zeros on the negative real axis
-    # it may keep so)
-    far = outside(zeros, max_preview)
-    use = not integrating and gap >= MODEL_FF_GAP and not far.any()
-    return use, (f"the sandwich fits {gap:.1f} points better than the "
-                 f"baseline (" + ("at least " if gap >= MODEL_FF_GAP
-                                  else "less than ") + f"{MODEL_FF_GAP:g})"
-                 + (", but L1 integrates" if integrating else "")
-                 + (f", but L1 L2 has zeros outside the unit circle at "
-                    f"{_fmt_roots(zeros[far])}" if far.any() else ""))
-
-
 def tf_arrays(sys):
     """(num, den) of a SISO transfer function, leading zeros trimmed."""
     return (np.trim_zeros(sys.num[0][0].astype(float), 'f'),
             sys.den[0][0].astype(float))
-
-
-def linear_part(model, result, lin_model, feedback_from, feedforward_from,
-                integrating, zeros, max_preview, mm, check_plant,
-                limit=None, measured=None, info=None):
-    """The linear part of a sandwich's design: (P, pid, ff_model, note,
-    baseline). P is the plant the feedback is designed on and pid its
-    gains where they were designed already (else None; `zeros` are L1
-    L2's); ff_model whether
-    the feedforward inverts the sandwich's mbar L1 L2 (else the
-    baseline); note why; baseline the linear baseline where the design
-    uses it (else None). `limit`: `design_pid`'s, a callable of the
-    plant's (num, den), or None; `measured` likewise; `info` is passed
-    on to `design_pid`.
-
-    The baseline (`lin_model`, a result's linear fit) carries the play's
-    effect on the loop, so by default the feedback is designed on it;
-    not when L2 integrates: a linear model cannot follow the drift the
-    play puts through an integrator after it, and spends a slow pole and
-    zero on it (step 5 of docs/algorithm.md), often with the wrong sign
-    or a crossover hundreds of times too slow; nor when the baseline's
-    low-frequency gain has the sign opposite to the sandwich's (with an
-    integrator in L1 and unequal slopes it can spend such a pair on the
-    drift too, and its PD then pushes the plant the wrong way)."""
-    for name, choice in (('feedback_from', feedback_from),
-                         ('feedforward_from', feedforward_from)):
-        if choice == 'baseline' and not isinstance(lin_model,
-                                                   ct.TransferFunction):
-            raise ValueError(f"{name}='baseline' needs an identification "
-                             f"result with a linear baseline (sw.identify's "
-                             f"result)")
-    co = model.coefficients
-    own = 0.5 * (co['m1'] + co['m2']) * model.L1 * model.L2
-    if lin_model is None:
-        return own, None, True, "linear part designed on the model's " \
-            "mbar L1 L2", None
-    if feedback_from == 'auto' and integrates(model.L2):
-        return own, None, True, (
-            "L2 integrates (the integrator after the play), which a linear "
-            "baseline cannot follow (it spends a slow pole and zero on the "
-            "play's drift), so linear part designed on the model's mbar L1 "
-            "L2"), None
-    if feedback_from == 'auto' and (low_frequency_sign(*tf_arrays(lin_model))
-                                    != low_frequency_sign(*tf_arrays(own))):
-        return own, None, True, (
-            "the result's linear baseline and the sandwich's mbar L1 L2 "
-            "move the output opposite ways at low frequency (the baseline "
-            "spent a pole and zero near z = 1 on the play's drift), so "
-            "linear part designed on the model's mbar L1 L2"), None
-    pid, fb_why = None, ''
-    if feedback_from != 'model':
-        try:
-            num, den = check_plant('the baseline', lin_model)
-            pid = design_pid(num, den, lin_model.dt, mm,
-                             limit(num, den) if callable(limit) else limit,
-                             measured(num, den) if callable(measured)
-                             else measured, info)
-        except ValueError as exc:
-            if 'baseline' in (feedback_from, feedforward_from):
-                raise ValueError(f"the result's linear baseline, asked for "
-                                 f"by feedback_from or feedforward_from, "
-                                 f"cannot be designed on: {exc}") from None
-            # the sandwich is what identify vouched for: design on it
-            return own, None, True, (
-                f"the result's linear baseline cannot be designed on "
-                f"({exc}), so linear part designed on the model's mbar L1 "
-                f"L2"), None
-    else:
-        fb_why = " (as asked)"
-    use, why = feedforward_source(feedforward_from, result, integrating,
-                                  zeros, max_preview)
-    note = ("feedback designed on " + ("the result's linear baseline fit"
-                                       if pid is not None else
-                                       "the sandwich's mbar L1 L2" + fb_why)
-            + "; feedforward inverts the " + ("sandwich's mbar L1 L2" if use
-                                              else "baseline") + f": {why}")
-    return (lin_model if pid is not None else own), pid, use, note, lin_model
-
-
-#: a pole at z = 1 with a zero this close to it is a drift term of the
-#: model, not an integrator of the axis: the pair is cancelled first
-UNIT_CANCEL = 1e-4
-
-
-def cancel_unit_pair(sys):
-    """`sys` with a pole at z = 1 removed together with the zero next to
-    it (within `UNIT_CANCEL`), when no other pole is that close to 1; or,
-    beside a pole at z = 1 (an integrator), a second pole that close with
-    that zero: a drift term (the linear fit pins a free pole at its
-    stability boundary on the play's drift, with a zero beside it); its
-    high-frequency gain is kept.
-    Returns (sys, the zero cancelled or None)."""
-    num, den = tf_arrays(sys)
-    if num.size < 2 or den.size < 2:
-        return sys, None
-    poles, zeros = np.roots(den), np.roots(num)
-    at_one = np.flatnonzero(np.abs(poles - 1) < 1e-6)
-    near = np.flatnonzero(np.abs(zeros - 1) < UNIT_CANCEL)
-    close = np.flatnonzero(np.abs(poles - 1) < UNIT_CANCEL)
-    if not (near.size and at_one.size and close.size in (1, 2)):
-        return sys, None      # none, or more poles near 1 than a pair
-    i = near[np.argmin(np.abs(zeros[near] - 1))]
-    gone = close[np.argmax(np.abs(poles[close] - 1))]
-    num = np.real(num[0] * np.poly(np.delete(zeros, i)))
-    den = np.real(den[0] * np.poly(np.delete(poles, gone)))
-    return ct.tf(num, den, sys.dt, name=sys.name), float(np.real(zeros[i]))
-
-
-def integrates(block):
-    """True if the transfer function has a pole at z = 1."""
-    den = block.den[0][0].astype(float)
-    return den.size > 1 and bool(np.any(np.abs(np.roots(den) - 1) < 1e-6))
-
-
-def cancel_drift(model, notes):
-    """A model with its drift terms (`cancel_unit_pair`) cancelled, each
-    told in `notes`."""
-    def cancel(sys, pole, zero):
-        out, at = cancel_unit_pair(sys)
-        if at is not None:
-            notes.append(f"{pole} at z = 1 and {zero} at {at:.6g} cancelled "
-                         f"before the design (a drift term of the model, "
-                         f"not an integrator)")
-        return out
-
-    if isinstance(model, SandwichSystem):
-        L1, L2 = (cancel(getattr(model, tag), f"a pole of {tag}",
-                         "its zero")
-                  for tag in ('L1', 'L2'))
-        if L1 is model.L1 and L2 is model.L2:
-            return model
-        return SandwichSystem(L1, model.backlash, L2, name=model.name)
-    if isinstance(model, ct.TransferFunction) and model.issiso():
-        return cancel(model, "a pole", "the zero")
-    return model

@@ -71,7 +71,6 @@ the error keeps the PID's states, so u does not jump.
 """
 
 import math
-import warnings
 
 import numpy as np
 import control as ct
@@ -79,11 +78,14 @@ import control as ct
 from . import _servo_design as sd
 from . import _servo_data as sdata
 from . import _servo_band as sb
+from . import _servo_linear as sl
+from ._servo_checks import (HARM, feedforward_checked, helps_on_model,
+                            scalar_index)
 from ._servo_guard import guard_scalars
 from ._servo_inputs import check_plant_tf, unwrap_model
 from ._servo_kernel import (pack, servo_step, servo_run, adapt_index,
                             rest_scalars, BAND, GUARD, INVERSE, NSCALAR)
-from .loop import servo_loop, ss_arrays
+from .loop import ss_arrays
 from ..model.sandwich import SandwichSystem
 from .._checks import (MAX_ORDER, PLAIN_REALS, check_finite,
                        check_int, check_name, check_nonnegative,
@@ -506,7 +508,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                          f"{operating_point!r}")
     u0, y0 = (check_finite('operating_point', v) for v in operating_point)
     notes, info = [], {}
-    model = sd.cancel_drift(model, notes)
+    model = sl.cancel_drift(model, notes)
     if isinstance(model, SandwichSystem):
         co = model.coefficients
         mbar = 0.5 * (co['m1'] + co['m2'])
@@ -514,10 +516,10 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         lin_model = (result.linear.get('model') if result is not None
                      and isinstance(getattr(result, 'linear', None), dict)
                      else None)
-        lin_model = sd.cancel_drift(lin_model, notes)
-        integrating = sd.integrates(model.L1)
+        lin_model = sl.cancel_drift(lin_model, notes)
+        integrating = sl.integrates(model.L1)
         ff_zeros = np.concatenate([model.L1.zeros(), model.L2.zeros()])
-        P, pid, ff_model, linear_note, lin_model = sd.linear_part(
+        P, pid, ff_model, linear_note, lin_model = sl.linear_part(
             model, result, lin_model, feedback_from, feedforward_from,
             integrating, ff_zeros, max_preview, mm, check_plant_tf,
             lambda n, d: limit(n, d)[0], measured, info)
@@ -584,7 +586,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                 and band_by_default and feedforward_from == 'auto'
                 and isinstance(lin_model, ct.TransferFunction)
                 and not integrating
-                and not sd.outside(ff_zeros, max_preview).any()):
+                and not sl.outside(ff_zeros, max_preview).any()):
             # the other feedforward, blended in online (see sd.blend)
             other_inv = sd.preview_inverse(
                 *((num, den) if ff_model else Pm), feedforward,
@@ -700,9 +702,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     checked = comp and result is not None
     r = sd.design_reference(model, 20, dt) if checked else None
     if checked and band_by_default and band_fraction > 0 and \
-            not _helps_on_model(ctrl, model, r):
+            not helps_on_model(ctrl, model, r):
         # the compensation must at least help on the model it came from
-        sc = _scalar_index(ctrl)
+        sc = scalar_index(ctrl)
         ctrl._p[sc + BAND.start:sc + BAND.stop] = 0.0
         ctrl.band_fraction = 0.0
         ctrl._design['band_fraction'] = 0.0
@@ -714,13 +716,10 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                      f"identified model itself was over {HARM:g} times "
                      f"worse than without (pass band_fraction to force it)")
     if checked and feedforward_from == 'auto' and lin_model is not None:
-        ctrl = _feedforward_checked(ctrl, source, model, asked, ff_model, r)
+        ctrl = feedforward_checked(
+            ctrl, lambda **kw: servo_controller(source, **{**asked, **kw}),
+            model, ff_model, r)
     return ctrl
-
-
-def _scalar_index(ctrl):
-    """Where the scalars start in ctrl._p."""
-    return int(ctrl._ix[9])
 
 
 #: with an integrating L1, the band jump is spread over at least this many
@@ -730,57 +729,6 @@ def _scalar_index(ctrl):
 JUMP_CROSSOVERS = 2.0
 #: but over no more samples than this (each half of it is preview)
 JUMP_MOST = 500
-
-#: the default compensation is turned off when it makes the loop around the
-#: identified model this much worse (a gross failure: on the drives the
-#: model predicts little of what compensation gains or loses)
-HARM = 1.25
-
-
-def _helps_on_model(ctrl, model, r):
-    """Whether the band offset does not make the RMS error of the loop
-    around the identified model `HARM` times worse, for the reference r
-    (`sd.design_reference` travelling 20 bands)."""
-    errors = []
-    for scale in (1.0, 0.0):
-        trial = ServoController(ctrl._design)
-        trial._p[_scalar_index(trial) + 2:_scalar_index(trial) + 4] *= scale
-        errors.append(_loop_error(trial, model, r))
-    return errors[0] <= HARM * errors[1]
-
-
-def _loop_error(ctrl, model, r):
-    """RMS error of `ctrl` around `model` for the reference r (inf if the
-    loop blows up)."""
-    with np.errstate(all='ignore'), warnings.catch_warnings():
-        warnings.simplefilter('ignore')
-        y = servo_loop(model, r, ctrl)[0]
-    err = float(np.sqrt(np.mean((r - y) ** 2)))
-    return err if np.isfinite(err) else np.inf
-
-
-def _feedforward_checked(ctrl, source, model, asked, ff_model, r):
-    """`ctrl`, unless its linear feedforward makes the loop around the
-    identified model `HARM` times worse than feedback alone for the
-    reference r: then the design that inverts the other linear model, or
-    failing that the one without feedforward, with a note (a baseline
-    that fits far worse than the sandwich can ask for inputs hundreds of
-    times too large)."""
-    bare = servo_controller(source, **{**asked, 'feedforward': None})
-    e, e_bare = _loop_error(ctrl, model, r), _loop_error(bare, model, r)
-    if e <= HARM * e_bare:
-        return ctrl
-    which = "sandwich's mbar L1 L2" if ff_model else "baseline"
-    other = servo_controller(source, **{**asked, 'feedforward_from':
-                                        'baseline' if ff_model else 'model'})
-    pick = other if _loop_error(other, model, r) <= HARM * e_bare else bare
-    pick.notes.append(
-        f"the feedforward inverting the {which} made tracking on the "
-        f"identified model {e / e_bare:.3g} times worse than feedback alone: "
-        + ("the other linear model is inverted" if pick is other else
-           "no feedforward") + " (pass feedforward_from to force it)")
-    return pick
-
 
 def _ff_note(kind, preview, approx, linear_note):
     text = (f"feedforward: model inverse with {preview} samples of "

@@ -1,0 +1,68 @@
+"""The checks of an identified sandwich's servo design around its own
+model: that the band's compensation helps there (`helps_on_model`), and
+that the linear feedforward does not wreck the loop
+(`feedforward_checked`). Each runs the loop around the identified model
+for `_servo_design.design_reference` travelling 20 of its bands."""
+
+import warnings
+
+import numpy as np
+
+from .loop import servo_loop
+
+#: the default compensation is turned off when it makes the loop around the
+#: identified model this much worse (a gross failure: on the drives the
+#: model predicts little of what compensation gains or loses)
+HARM = 1.25
+
+
+def scalar_index(ctrl):
+    """Where the scalars start in ctrl._p."""
+    return int(ctrl._ix[9])
+
+
+def loop_error(ctrl, model, r):
+    """RMS error of `ctrl` around `model` for the reference r (inf if the
+    loop blows up)."""
+    with np.errstate(all='ignore'), warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        y = servo_loop(model, r, ctrl)[0]
+    err = float(np.sqrt(np.mean((r - y) ** 2)))
+    return err if np.isfinite(err) else np.inf
+
+
+def helps_on_model(ctrl, model, r):
+    """Whether the band offset does not make the RMS error of the loop
+    around the identified model `HARM` times worse, for the reference
+    r."""
+    errors = []
+    for scale in (1.0, 0.0):
+        trial = type(ctrl)(ctrl._design)
+        sc = scalar_index(trial)
+        trial._p[sc + 2:sc + 4] *= scale
+        errors.append(loop_error(trial, model, r))
+    return errors[0] <= HARM * errors[1]
+
+
+def feedforward_checked(ctrl, design, model, ff_model, r):
+    """`ctrl`, unless its linear feedforward makes the loop around the
+    identified model `HARM` times worse than feedback alone for the
+    reference r: then the design that inverts the other linear model, or
+    failing that the one without feedforward, with a note (a baseline
+    that fits far worse than the sandwich can ask for inputs hundreds of
+    times too large). `design(**kw)` is the same design with the keywords
+    kw changed; `ff_model` whether ctrl's feedforward inverts the
+    sandwich's mbar L1 L2 (else the baseline)."""
+    bare = design(feedforward=None)
+    e, e_bare = loop_error(ctrl, model, r), loop_error(bare, model, r)
+    if e <= HARM * e_bare:
+        return ctrl
+    which = "sandwich's mbar L1 L2" if ff_model else "baseline"
+    other = design(feedforward_from='baseline' if ff_model else 'model')
+    pick = other if loop_error(other, model, r) <= HARM * e_bare else bare
+    pick.notes.append(
+        f"the feedforward inverting the {which} made tracking on the "
+        f"identified model {e / e_bare:.3g} times worse than feedback alone: "
+        + ("the other linear model is inverted" if pick is other else
+           "no feedforward") + " (pass feedforward_from to force it)")
+    return pick

@@ -1,0 +1,182 @@
+"""Which linear model a sandwich's servo design is built on: the feedback
+on the result's linear baseline or on the sandwich's mbar L1 L2, the
+feedforward inverting the one or the other (`linear_part`), and the drift
+terms (a pole at z = 1 beside a zero) cancelled from a model first."""
+
+import numpy as np
+import control as ct
+
+from ..model.sandwich import SandwichSystem
+from .inverse import _fmt_roots
+from ._servo_design import (RINGING, design_pid, low_frequency_sign,
+                            series_length, tf_arrays)
+
+
+#: the sandwich's linear part drives the feedforward of a non-integrating
+#: axis when the sandwich fits this many points better than the linear
+#: baseline: the play then distorts the baseline's dynamics
+MODEL_FF_GAP = 2.0
+
+
+def outside(zeros, max_preview):
+    """Which zeros lie outside the unit circle where the preview inverse
+    can keep only their DC gain (sampling zeros on the negative real axis
+    it may keep so)."""
+    return np.array([abs(zj) >= 1 and np.real(zj) >= RINGING
+                     and series_length(zj) > max_preview
+                     for zj in zeros], bool)
+
+
+def feedforward_source(choice, result, integrating, zeros, max_preview):
+    """Whether the feedforward inverts the sandwich's own mbar L1 L2
+    (else the linear baseline), and why (`choice` is 'auto', 'model' or
+    'baseline'; there is a baseline)."""
+    if choice != 'auto':
+        return choice == 'model', "as asked"
+    gap = result.fit - result.linear['fit']
+    # zeros outside the unit circle that the preview inverse can only
+    # keep by their DC gain (sampling zeros on the negative real axis
+    # it may keep so)
+    far = outside(zeros, max_preview)
+    use = not integrating and gap >= MODEL_FF_GAP and not far.any()
+    return use, (f"the sandwich fits {gap:.1f} points better than the "
+                 f"baseline (" + ("at least " if gap >= MODEL_FF_GAP
+                                  else "less than ") + f"{MODEL_FF_GAP:g})"
+                 + (", but L1 integrates" if integrating else "")
+                 + (f", but L1 L2 has zeros outside the unit circle at "
+                    f"{_fmt_roots(zeros[far])}" if far.any() else ""))
+
+
+def linear_part(model, result, lin_model, feedback_from, feedforward_from,
+                integrating, zeros, max_preview, mm, check_plant,
+                limit=None, measured=None, info=None):
+    """The linear part of a sandwich's design: (P, pid, ff_model, note,
+    baseline). P is the plant the feedback is designed on and pid its
+    gains where they were designed already (else None; `zeros` are L1
+    L2's); ff_model whether
+    the feedforward inverts the sandwich's mbar L1 L2 (else the
+    baseline); note why; baseline the linear baseline where the design
+    uses it (else None). `limit`: `design_pid`'s, a callable of the
+    plant's (num, den), or None; `measured` likewise; `info` is passed
+    on to `design_pid`.
+
+    The baseline (`lin_model`, a result's linear fit) carries the play's
+    effect on the loop, so by default the feedback is designed on it;
+    not when L2 integrates: a linear model cannot follow the drift the
+    play puts through an integrator after it, and spends a slow pole and
+    zero on it (step 5 of docs/algorithm.md), often with the wrong sign
+    or a crossover hundreds of times too slow; nor when the baseline's
+    low-frequency gain has the sign opposite to the sandwich's (with an
+    integrator in L1 and unequal slopes it can spend such a pair on the
+    drift too, and its PD then pushes the plant the wrong way)."""
+    for name, choice in (('feedback_from', feedback_from),
+                         ('feedforward_from', feedforward_from)):
+        if choice == 'baseline' and not isinstance(lin_model,
+                                                   ct.TransferFunction):
+            raise ValueError(f"{name}='baseline' needs an identification "
+                             f"result with a linear baseline (sw.identify's "
+                             f"result)")
+    co = model.coefficients
+    own = 0.5 * (co['m1'] + co['m2']) * model.L1 * model.L2
+    if lin_model is None:
+        return own, None, True, "linear part designed on the model's " \
+            "mbar L1 L2", None
+    if feedback_from == 'auto' and integrates(model.L2):
+        return own, None, True, (
+            "L2 integrates (the integrator after the play), which a linear "
+            "baseline cannot follow (it spends a slow pole and zero on the "
+            "play's drift), so linear part designed on the model's mbar L1 "
+            "L2"), None
+    if feedback_from == 'auto' and (low_frequency_sign(*tf_arrays(lin_model))
+                                    != low_frequency_sign(*tf_arrays(own))):
+        return own, None, True, (
+            "the result's linear baseline and the sandwich's mbar L1 L2 "
+            "move the output opposite ways at low frequency (the baseline "
+            "spent a pole and zero near z = 1 on the play's drift), so "
+            "linear part designed on the model's mbar L1 L2"), None
+    pid, fb_why = None, ''
+    if feedback_from != 'model':
+        try:
+            num, den = check_plant('the baseline', lin_model)
+            pid = design_pid(num, den, lin_model.dt, mm,
+                             limit(num, den) if callable(limit) else limit,
+                             measured(num, den) if callable(measured)
+                             else measured, info)
+        except ValueError as exc:
+            if 'baseline' in (feedback_from, feedforward_from):
+                raise ValueError(f"the result's linear baseline, asked for "
+                                 f"by feedback_from or feedforward_from, "
+                                 f"cannot be designed on: {exc}") from None
+            # the sandwich is what identify vouched for: design on it
+            return own, None, True, (
+                f"the result's linear baseline cannot be designed on "
+                f"({exc}), so linear part designed on the model's mbar L1 "
+                f"L2"), None
+    else:
+        fb_why = " (as asked)"
+    use, why = feedforward_source(feedforward_from, result, integrating,
+                                  zeros, max_preview)
+    note = ("feedback designed on " + ("the result's linear baseline fit"
+                                       if pid is not None else
+                                       "the sandwich's mbar L1 L2" + fb_why)
+            + "; feedforward inverts the " + ("sandwich's mbar L1 L2" if use
+                                              else "baseline") + f": {why}")
+    return (lin_model if pid is not None else own), pid, use, note, lin_model
+
+
+#: a pole at z = 1 with a zero this close to it is a drift term of the
+#: model, not an integrator of the axis: the pair is cancelled first
+UNIT_CANCEL = 1e-4
+
+
+def cancel_unit_pair(sys):
+    """`sys` with a pole at z = 1 removed together with the zero next to
+    it (within `UNIT_CANCEL`), when no other pole is that close to 1; or,
+    beside a pole at z = 1 (an integrator), a second pole that close with
+    that zero: a drift term (the linear fit pins a free pole at its
+    stability boundary on the play's drift, with a zero beside it); its
+    high-frequency gain is kept.
+    Returns (sys, the zero cancelled or None)."""
+    num, den = tf_arrays(sys)
+    if num.size < 2 or den.size < 2:
+        return sys, None
+    poles, zeros = np.roots(den), np.roots(num)
+    at_one = np.flatnonzero(np.abs(poles - 1) < 1e-6)
+    near = np.flatnonzero(np.abs(zeros - 1) < UNIT_CANCEL)
+    close = np.flatnonzero(np.abs(poles - 1) < UNIT_CANCEL)
+    if not (near.size and at_one.size and close.size in (1, 2)):
+        return sys, None      # none, or more poles near 1 than a pair
+    i = near[np.argmin(np.abs(zeros[near] - 1))]
+    gone = close[np.argmax(np.abs(poles[close] - 1))]
+    num = np.real(num[0] * np.poly(np.delete(zeros, i)))
+    den = np.real(den[0] * np.poly(np.delete(poles, gone)))
+    return ct.tf(num, den, sys.dt, name=sys.name), float(np.real(zeros[i]))
+
+
+def integrates(block):
+    """True if the transfer function has a pole at z = 1."""
+    den = block.den[0][0].astype(float)
+    return den.size > 1 and bool(np.any(np.abs(np.roots(den) - 1) < 1e-6))
+
+
+def cancel_drift(model, notes):
+    """A model with its drift terms (`cancel_unit_pair`) cancelled, each
+    told in `notes`."""
+    def cancel(sys, pole, zero):
+        out, at = cancel_unit_pair(sys)
+        if at is not None:
+            notes.append(f"{pole} at z = 1 and {zero} at {at:.6g} cancelled "
+                         f"before the design (a drift term of the model, "
+                         f"not an integrator)")
+        return out
+
+    if isinstance(model, SandwichSystem):
+        L1, L2 = (cancel(getattr(model, tag), f"a pole of {tag}",
+                         "its zero")
+                  for tag in ('L1', 'L2'))
+        if L1 is model.L1 and L2 is model.L2:
+            return model
+        return SandwichSystem(L1, model.backlash, L2, name=model.name)
+    if isinstance(model, ct.TransferFunction) and model.issiso():
+        return cancel(model, "a pole", "the zero")
+    return model
