@@ -8,6 +8,7 @@ import warnings
 
 import numpy as np
 
+from ._servo_kernel import BAND
 from .loop import servo_loop
 
 #: the default compensation is turned off when it makes the loop around the
@@ -39,7 +40,7 @@ def helps_on_model(ctrl, model, r):
     for scale in (1.0, 0.0):
         trial = type(ctrl)(ctrl._design)
         sc = scalar_index(trial)
-        trial._p[sc + 2:sc + 4] *= scale
+        trial._p[sc + BAND.start:sc + BAND.stop] *= scale
         errors.append(loop_error(trial, model, r))
     return errors[0] <= HARM * errors[1]
 
