@@ -269,6 +269,16 @@ def test_pickle_keeps_name_design_and_memory():
     assert again.step(0.3, 0.2) == ctrl.step(0.3, 0.2)
 
 
+def test_the_named_layout_of_ix_is_the_one_pack_writes():
+    # the Python side reads ix by name (IX_SCALAR and the like); the names
+    # must cover what pack lays out, the scalars ending p
+    from sandwichctl.design import _servo_kernel as sk
+    ctrl = sw.servo_controller(sw.examples.paper_plant())
+    assert ctrl._ix.size == len(sk.IX)
+    assert ctrl._ix[sk.IX_SCALAR] + sk.NSCALAR == ctrl._p.size
+    assert ctrl._ix[sk.IX_GUARD] + sk.NGUARD == ctrl.state.size
+
+
 def test_operating_point_and_bumpless_reset():
     P = ct.tf([0.5, 0.2], [1, -1.1, 0.3], 1)
     ctrl = sw.servo_controller(P, operating_point=(2.0, 10.0))

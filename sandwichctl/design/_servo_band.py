@@ -6,7 +6,7 @@ into a spike."""
 import numpy as np
 import control as ct
 
-from ._servo_design import low_frequency_gain, preview_inverse
+from ._servo_design import at_one, low_frequency_gain, preview_inverse
 
 __all__ = []
 
@@ -37,7 +37,7 @@ def jump_samples(L1_num, L1_den, band_x, dt, cap=2.0, longest=50):
     across the band within L1's own response time)."""
     inv_num, inv_den, _, _ = preview_inverse(L1_num, L1_den)
     poles = np.roots(L1_den) if L1_den.size > 1 else np.zeros(0)
-    integ = np.any(np.abs(poles - 1) < 1e-6)
+    integ = np.any(at_one(poles))
     t = np.arange(4 * longest)
     for n in range(1, longest + 1):
         ramp = band_x * np.minimum(t / n, 1.0)
@@ -47,7 +47,7 @@ def jump_samples(L1_num, L1_den, band_x, dt, cap=2.0, longest=50):
         if integ:
             # x crosses the band in n samples: at most cap times the input
             # whose integral does it in L1's settling time
-            rest = poles[np.abs(poles - 1) >= 1e-6]
+            rest = poles[~at_one(poles)]
             slow = max([1.0] + [1 / max(1e-9, 1 - abs(p)) for p in rest])
             hold = np.sum(np.abs(u)) / slow
         else:

@@ -8,7 +8,7 @@ import warnings
 
 import numpy as np
 
-from ._servo_kernel import BAND
+from ._servo_kernel import BAND, IX_SCALAR
 from .loop import servo_loop
 
 #: the default compensation is turned off when it makes the loop around the
@@ -19,7 +19,7 @@ HARM = 1.25
 
 def scalar_index(ctrl):
     """Where the scalars start in ctrl._p."""
-    return int(ctrl._ix[9])
+    return int(ctrl._ix[IX_SCALAR])
 
 
 def loop_error(ctrl, model, r):

@@ -60,7 +60,7 @@ def crossover_limit(bands, num, den):
     bandwidths for the plant num/den, given the error bands (w, delta) of
     its data (`tools.residuals.error_bands`, None for a model without
     data), and why in words."""
-    if np.any(np.abs(np.roots(den) - 1) < 1e-6):
+    if np.any(sd.at_one(np.roots(den))):
         return CROSSOVER_LIMIT['pd'], "the PD's of an integrating plant"
     base = CROSSOVER_LIMIT['pid']
     if bands is None or len(bands[0]) == 0:

@@ -53,8 +53,16 @@ ZERO_RADIUS = 1.0
 #: zeros left of this real part make an inverse ring at the Nyquist
 #: frequency (sampling zeros); they keep only their DC gain
 RINGING = -0.5
+#: a pole this close to z = 1 is an integrator (`at_one`)
+AT_ONE = 1e-6
 #: truncation of the anticausal series of an unstable zero
 SERIES_TOL = 1e-3
+
+
+def at_one(roots):
+    """Which of the roots sit at z = 1 (within `AT_ONE`): the
+    integrators among poles."""
+    return np.abs(np.asarray(roots) - 1) < AT_ONE
 
 
 def frequency_grid(den, n=1500):
@@ -195,7 +203,7 @@ def bandwidth(num, den, w):
     z = np.exp(1j * w)
     P = np.polyval(num, z) / np.polyval(den, z)
     poles = np.roots(den) if den.size > 1 else np.zeros(0)
-    if np.any(np.abs(poles - 1) < 1e-6):
+    if np.any(at_one(poles)):
         P = P * (z - 1) / z
     mag = np.abs(P)
     below = np.nonzero(mag <= mag[0] / np.sqrt(2))[0]
@@ -280,7 +288,7 @@ def low_frequency_gain(num, den):
     gain when it has a pole at z = 1 (d is then the rest of the
     denominator at z = 1)."""
     poles = np.roots(den) if den.size > 1 else np.zeros(0)
-    one = np.abs(poles - 1) < 1e-6
+    one = at_one(poles)
     rest = np.atleast_1d(np.real(np.poly(poles[~one]))) if one.any() else den
     return np.polyval(num, 1.0), np.polyval(rest, 1.0), bool(one.any())
 
@@ -337,7 +345,7 @@ def design_pid(num, den, dt, modulus_margin, limit=None, measured=None,
     num = sign * num
     P = np.polyval(num, z) / np.polyval(den, z)
     wb = bandwidth(num, den, w)
-    integrating = np.any(np.abs(np.roots(den) - 1) < 1e-6)
+    integrating = np.any(at_one(np.roots(den)))
     if limit is None:
         limit = CROSSOVER_LIMIT['pd' if integrating else 'pid']
     # scale of the gains: 1/|P| at the plant's bandwidth and where its

@@ -51,18 +51,18 @@ def check_plant_tf(name, sys):
             f"{hi:g}: the design squares it, which would {what} double "
             f"precision; rescale u or y (other units)")
     poles = np.roots(den) if den.size > 1 else np.zeros(0)
-    at_one = np.abs(poles - 1.0) < 1e-6
-    if at_one.sum() > 1 or np.any(np.abs(poles[~at_one]) >= 1.0):
+    one = sd.at_one(poles)
+    if one.sum() > 1 or np.any(np.abs(poles[~one]) >= 1.0):
         raise ValueError(
             f"{name} must be stable or have one integrator (a pole at "
             f"z = 1, as a speed-in, position-out axis); got poles "
             f"{sd._fmt_roots(poles)}. Re-identify with integrators=1 (a "
             f"speed-in, position-out axis) or integrators=0, or with "
             f"fewer poles")
-    if np.any(np.abs(poles[at_one] - 1.0) > 1e-12):
+    if np.any(np.abs(poles[one] - 1.0) > 1e-12):
         # the integrator exactly at 1: at 1 - 1e-8 the grid would reach
         # down to 1e-9 rad/sample, where the plant's gain is 10 times
         # below its integrator's, and the bandwidth would come out 8 times
         # too high (random drive 18 of benchmarks/bench_servo.py)
-        den = den[0] * np.real(np.poly(np.where(at_one, 1.0, poles)))
+        den = den[0] * np.real(np.poly(np.where(one, 1.0, poles)))
     return num, den

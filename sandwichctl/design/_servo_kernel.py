@@ -52,6 +52,13 @@ SCALARS = ('m1', 'm2', 'D1', 'D2', 'width', 'mbar', 'rate', 'alpha', 'lam',
  _PB0, _PBMAX, _HUNT, _SETTLE, _BETA, _FLOOR, _GAP, _U0,
  _Y0) = range(len(SCALARS))
 NSCALAR = len(SCALARS)
+#: names of the entries of ix, in order (the layout above)
+IX = ('preview', 'lead', 'n_fb', 'n_pre', 'n_post', 'compensate', 'off_fb',
+      'off_pre', 'off_post', 'off_scalar', 'n_lin', 'off_lin', 'n_ps',
+      'off_ps', 'adapt', 'n_other', 'off_other', 'blend', 'off_guard')
+#: the entries of ix that Python reads or turns off after `pack`
+IX_SCALAR, IX_ADAPT, IX_BLEND, IX_GUARD = (
+    IX.index(name) for name in ('off_scalar', 'adapt', 'blend', 'off_guard'))
 #: the stretches of scalars that one part of the design writes: the backlash
 #: inverse, the compensated band alone, the band gain's estimate, the
 #: feedforward blend's prior and the hunting guard

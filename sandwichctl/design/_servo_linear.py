@@ -8,7 +8,7 @@ import control as ct
 
 from ..model.sandwich import SandwichSystem
 from .inverse import _fmt_roots
-from ._servo_design import (RINGING, design_pid, low_frequency_sign,
+from ._servo_design import (RINGING, at_one, design_pid, low_frequency_sign,
                             series_length, tf_arrays)
 
 
@@ -141,10 +141,10 @@ def cancel_unit_pair(sys):
     if num.size < 2 or den.size < 2:
         return sys, None
     poles, zeros = np.roots(den), np.roots(num)
-    at_one = np.flatnonzero(np.abs(poles - 1) < 1e-6)
+    unit = np.flatnonzero(at_one(poles))
     near = np.flatnonzero(np.abs(zeros - 1) < UNIT_CANCEL)
     close = np.flatnonzero(np.abs(poles - 1) < UNIT_CANCEL)
-    if not (near.size and at_one.size and close.size in (1, 2)):
+    if not (near.size and unit.size and close.size in (1, 2)):
         return sys, None      # none, or more poles near 1 than a pair
     i = near[np.argmin(np.abs(zeros[near] - 1))]
     gone = close[np.argmax(np.abs(poles[close] - 1))]
@@ -156,7 +156,7 @@ def cancel_unit_pair(sys):
 def integrates(block):
     """True if the transfer function has a pole at z = 1."""
     den = block.den[0][0].astype(float)
-    return den.size > 1 and bool(np.any(np.abs(np.roots(den) - 1) < 1e-6))
+    return den.size > 1 and bool(np.any(at_one(np.roots(den))))
 
 
 def cancel_drift(model, notes):

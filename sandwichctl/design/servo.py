@@ -84,7 +84,8 @@ from ._servo_checks import (HARM, feedforward_checked, helps_on_model,
 from ._servo_guard import guard_scalars
 from ._servo_inputs import check_plant_tf, unwrap_model
 from ._servo_kernel import (pack, servo_step, servo_run, adapt_index,
-                            rest_scalars, BAND, GUARD, INVERSE, NSCALAR)
+                            rest_scalars, BAND, GUARD, INVERSE, NSCALAR,
+                            IX_ADAPT, IX_BLEND, IX_GUARD, IX_SCALAR)
 from .loop import ss_arrays
 from ..model.sandwich import SandwichSystem
 from .._checks import (MAX_ORDER, PLAIN_REALS, check_finite,
@@ -209,7 +210,7 @@ class ServoController(ct.NonlinearIOSystem):
             Without them the operating point given at design is kept.
         """
         self._s[:] = 0.0
-        sc = self._ix[9]
+        sc = self._ix[IX_SCALAR]
         if y is not None:
             self._p[sc + NSCALAR - 1] = check_finite('y', y)
         if u is not None:
@@ -263,7 +264,7 @@ class ServoController(ct.NonlinearIOSystem):
     def feedback_gain(self):
         """The hunting guard's scale c on the feedback's gains now (1 at
         rest and without the guard; see `hunting`)."""
-        return 1.0 + float(self._s[int(self._ix[18])])
+        return 1.0 + float(self._s[int(self._ix[IX_GUARD])])
 
     @property
     def feedforward_blend(self):
@@ -709,7 +710,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         ctrl.band_fraction = 0.0
         ctrl._design['band_fraction'] = 0.0
         ctrl._design['_scalars'][BAND] = 0.0
-        ctrl._ix[14] = ctrl._ix[17] = 0
+        ctrl._ix[IX_ADAPT] = ctrl._ix[IX_BLEND] = 0
         ctrl.adapts = ctrl._design['adapts'] = False
         ctrl.blends = ctrl._design['blends'] = False
         notes.append(f"compensation turned off: with it, tracking on the "

@@ -14,7 +14,8 @@ import control as ct
 
 from .inverse import causal_inverse, _fmt_roots
 from .compensator import _tf_text
-from ._servo_design import frequency_grid, loop_radius, design_pid, pid_tf
+from ._servo_design import (at_one, frequency_grid, loop_radius, design_pid,
+                            pid_tf)
 from .._checks import (check_discrete_siso_tf, common_dt, check_bool,
                        check_finite)
 
@@ -173,8 +174,8 @@ def tracking_controller(sys, feedforward=True, modulus_margin=0.6,
         raise ValueError(f"modulus_margin must be in (0, 1); got "
                          f"{modulus_margin!r}")
     poles = np.roots(den) if den.size > 1 else np.zeros(0)
-    at_one = np.abs(poles - 1.0) < 1e-6
-    if at_one.sum() == 1 and np.all(np.abs(poles[~at_one]) < 1):
+    one = at_one(poles)
+    if one.sum() == 1 and np.all(np.abs(poles[~one]) < 1):
         # a type-1 plant: the PID of servo_controller's design
         kp, ki, kd, pole = design_pid(num, den, sys.dt, modulus_margin)
         C = pid_tf(kp, ki, kd, pole, sys.dt)
