@@ -797,6 +797,43 @@ def test_the_band_gain_follows_the_play_the_loop_meets(scale, low, high):
     assert err[1] <= 1.01 * err[0]
 
 
+def test_a_feedforward_asking_for_much_more_activity_is_smoothed(
+        monkeypatch):
+    """The sandwich's own mbar L1 L2 (slow poles, two samples of relative
+    degree) inverted asks for over 4 times the input activity of a
+    baseline of relative degree one: its feedforward is smoothed, and on
+    the plant the input moves less for a like error; inverting a
+    baseline that is the model's own L1 L2 is left alone."""
+    import types
+    from sandwichctl.design import _servo_design as sdes
+    kw = dict(a=[-0.98], b=[0.02], c=[-0.95], d=[0.05], m1=1.0, m2=1.0,
+              dt=1e-3)
+    plant = sw.SandwichSystem.from_coefficients(D1=0.2, D2=0.2, **kw)
+
+    def result(baseline):
+        return types.SimpleNamespace(model=plant, success=True, fit=95.0,
+                                     linear=dict(model=baseline, fit=90.0))
+
+    # the feedback on the model: this baseline is not the plant
+    rough = result(ct.tf([0.1], [1, -0.9], 1e-3))
+    smooth = sw.servo_controller(rough, feedback_from='model')
+    calm = sw.servo_controller(result(plant.L1 * plant.L2))
+    assert any("smoothed by a zero-phase Hann window" in n
+               for n in smooth.notes)
+    assert not any("smoothed" in n for n in calm.notes)
+    monkeypatch.setattr(sdes, 'FF_ACTIVITY', np.inf)
+    raw = sw.servo_controller(rough, feedback_from='model')
+    assert smooth.preview == raw.preview + sdes.FF_SMOOTH
+    r = sw.servo_reference(1e-3, 5.0)
+    outs = [sw.closed_loop_response(plant, r, c).outputs for c in
+            (raw, smooth)]
+    err = [np.sqrt(np.mean((r - y) ** 2)) for y, _ in outs]
+    activity = [np.sum(np.abs(np.diff(u))) for _, u in outs]
+    # 0.65 times the activity, and 0.995 times the error, as measured
+    assert activity[1] < 0.75 * activity[0]
+    assert err[1] < 1.02 * err[0]
+
+
 def test_reset_restarts_the_online_estimate_and_c_state_is_python_state():
     plant, result = _mismatched(0.5)
     ctrl = sw.servo_controller(result)

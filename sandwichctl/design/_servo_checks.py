@@ -2,11 +2,14 @@
 model: that the band's compensation helps there (`helps_on_model`), and
 that the linear feedforward does not wreck the loop
 (`feedforward_checked`). Each runs the loop around the identified model
-for `_servo_design.design_reference` travelling 20 of its bands."""
+for `_servo_design.design_reference` travelling 20 of its bands. And how
+much input activity one linear feedforward asks for against another
+(`activity_ratio`)."""
 
 import warnings
 
 import numpy as np
+from scipy.signal import lfilter
 
 from ._servo_kernel import BAND, IX_SCALAR
 from .loop import servo_loop
@@ -20,6 +23,20 @@ HARM = 1.25
 def scalar_index(ctrl):
     """Where the scalars start in ctrl._p."""
     return int(ctrl._ix[IX_SCALAR])
+
+
+def activity_ratio(ff, other, r):
+    """The total variation of the feedforward ff = (num, den) along the
+    reference r over that of `other` (inf where other's is 0): polynomials
+    in z with the preview, which shifts the output but leaves its total
+    variation alone."""
+    def tv(num, den):
+        num, den = np.atleast_1d(num), np.atleast_1d(den)
+        # descending powers of z: num / den = z^(len(num) - len(den)) *
+        # the causal filter num / den in z^-1, a shift
+        return float(np.sum(np.abs(np.diff(lfilter(num, den, r)))))
+    base = tv(*other)
+    return tv(*ff) / base if base > 0 else np.inf
 
 
 def loop_error(ctrl, model, r):

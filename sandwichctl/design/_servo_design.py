@@ -118,6 +118,32 @@ def preview_inverse(num, den, kind='preview', max_preview=20):
     return n_num, n_den, max(delay, 0), dc_only
 
 
+#: an identified sandwich's feedforward that inverts its own mbar L1 L2 is
+#: smoothed when, on `design_reference`, it asks for more than FF_ACTIVITY
+#: times the input activity (total variation) of the baseline's inverse:
+#: the issue's chatter bound on u against the linear design. The window is
+#: a zero-phase Hann window of 2 FF_SMOOTH + 1 taps (FF_SMOOTH samples more
+#: of preview); the sandwich's relative degree exceeds the baseline's, and
+#: near the Nyquist frequency its inverse amplifies what no record
+#: vouches for. Random drive 75 of benchmarks/bench_servo.py (261 um of
+#: play; 5.0 times the baseline's activity) tracked at 10.2 um with 3.11
+#: times the linear design's input activity, random drive 72 (3.2 times) at
+#: 20.4 um with 0.64 times; smoothed, see docs/benchmarks.md
+FF_ACTIVITY = 3.0
+FF_SMOOTH = 2
+
+
+def smoothed(fn, fd, preview, m=FF_SMOOTH):
+    """(fn, fd, preview) of the feedforward fn/fd, with `preview` samples
+    of preview, times a zero-phase Hann window of 2 m + 1 taps: m samples
+    more of preview."""
+    if m == 0:
+        return fn, fd, preview
+    w = np.hanning(2 * m + 3)[1:-1]
+    return (np.convolve(fn, w / w.sum()), np.r_[fd, np.zeros(2 * m)],
+            preview + m)
+
+
 def pid_tf(kp, ki, kd, pole, dt):
     """C(z) as a transfer function (without the integrator if ki = 0)."""
     if ki == 0:

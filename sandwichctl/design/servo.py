@@ -79,8 +79,8 @@ from . import _servo_design as sd
 from . import _servo_data as sdata
 from . import _servo_band as sb
 from . import _servo_linear as sl
-from ._servo_checks import (HARM, feedforward_checked, helps_on_model,
-                            scalar_index)
+from ._servo_checks import (HARM, activity_ratio, feedforward_checked,
+                            helps_on_model, scalar_index)
 from ._servo_guard import guard_scalars
 from ._servo_inputs import check_plant_tf, unwrap_model
 from ._servo_kernel import (pack, servo_step, servo_run, adapt_index,
@@ -573,6 +573,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     ps, adapts = zero, False
     scal = rest_scalars(u0, y0)
     other, other_inv, blends = zero, None, False
+    smooth, ratio = 0, None
     if feedforward is None:
         preview, lin_ff = 0, zero
         notes.append("no feedforward: feedback only")
@@ -582,16 +583,26 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         fn, fd, preview, approx = sd.preview_inverse(
             *(Pm if comp and ff_model else (num, den)), feedforward,
             max_preview)
-        notes.append(_ff_note(feedforward, preview, approx, linear_note))
+        if comp and ff_model and result is not None and \
+                isinstance(lin_model, ct.TransferFunction):
+            # the chatter bound: against the baseline's inverse
+            ratio = activity_ratio(
+                (fn, fd), sd.preview_inverse(*sd.tf_arrays(lin_model),
+                                             feedforward, max_preview)[:2],
+                sd.design_reference(model, 20, dt))
+            smooth = sd.FF_SMOOTH if ratio > sd.FF_ACTIVITY else 0
+            fn, fd, preview = sd.smoothed(fn, fd, preview, smooth)
+        notes.append(_ff_note(feedforward, preview, approx, linear_note,
+                              smooth, ratio))
         if (comp and result is not None and adapt is not False
                 and band_by_default and feedforward_from == 'auto'
                 and isinstance(lin_model, ct.TransferFunction)
                 and not integrating
                 and not sl.outside(ff_zeros, max_preview).any()):
             # the other feedforward, blended in online (see sd.blend)
-            other_inv = sd.preview_inverse(
+            other_inv = sd.smoothed(*sd.preview_inverse(
                 *((num, den) if ff_model else Pm), feedforward,
-                max_preview)[:3]
+                max_preview)[:3], smooth)
     if comp:
         # a model without data (known, or built by hand) is inverted
         # exactly along the reference; an identified one gets the band
@@ -605,7 +616,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                                                max_preview)
             preview, fn, fd = 0, np.zeros(1), np.ones(1)
         else:
-            n2, d2, p2 = sb.static_inverse(L2n, L2d)
+            # the band offset smoothed as the linear feedforward is
+            n2, d2, p2 = sd.smoothed(*sb.static_inverse(L2n, L2d), smooth)
             if np.any(np.abs(model.L1.zeros()) >= 1):
                 # a non-minimum-phase L1 first moves the wrong way: its DC
                 # gain alone would send the offset astray
@@ -731,10 +743,15 @@ JUMP_CROSSOVERS = 2.0
 #: but over no more samples than this (each half of it is preview)
 JUMP_MOST = 500
 
-def _ff_note(kind, preview, approx, linear_note):
+def _ff_note(kind, preview, approx, linear_note, smooth, ratio):
     text = (f"feedforward: model inverse with {preview} samples of "
             f"preview" + (" (ZPETC for zeros outside the unit circle)"
                           if kind == 'zpetc' else ""))
+    if smooth:
+        text += (f", smoothed by a zero-phase Hann window of {2 * smooth + 1}"
+                 f" taps ({smooth} of the samples of preview): unsmoothed "
+                 f"it asks for {ratio:.3g} times the input activity of the "
+                 f"baseline's inverse (more than {sd.FF_ACTIVITY:g})")
     if approx:
         text += (f"; zero(s) at {sd._fmt_roots(np.array(approx))} kept by "
                  f"their DC gain only")
