@@ -210,6 +210,32 @@ def test_any_plant_with_a_step_method_gives_the_same_loop():
     np.testing.assert_allclose(u, fast.outputs[1], atol=1e-10)
 
 
+@pytest.mark.parametrize('kw', [dict(band_fraction=0.3),
+                                dict(smoothing=0.01), dict(adapt=True),
+                                dict(jump_samples=3)])
+def test_compensation_settings_without_compensation_are_refused(kw):
+    """Never ignored silently: a linear model, or a sandwich without
+    feedforward, has no band to set."""
+    P = ct.tf([0.5, 0.2], [1, -1.1, 0.3], 1e-3)
+    with pytest.raises(ValueError, match="a linear model has none"):
+        sw.servo_controller(P, **kw)
+    with pytest.raises(ValueError, match="feedforward=None turns it off"):
+        sw.servo_controller(sw.examples.paper_plant(), feedforward=None,
+                            **kw)
+
+
+def test_a_stepped_plant_with_another_sample_time_is_refused():
+    P = ct.tf([0.5, 0.2], [1, -1.1, 0.3], 1e-3)
+    ctrl = sw.servo_controller(P)
+    plant = StepPlant(P)
+    plant.dt = 2e-3
+    with pytest.raises(ValueError, match="same sampling time"):
+        sw.closed_loop_response(plant, np.zeros(10), ctrl)
+    plant.dt = 1e-3                     # alike: runs
+    assert sw.closed_loop_response(plant, np.zeros(10), ctrl).outputs.shape \
+        == (2, 10)
+
+
 class FailingPlant(StepPlant):
     """A hardware loop whose drive trips at its fifth step."""
 
@@ -286,6 +312,10 @@ def test_operating_point_and_bumpless_reset():
     ctrl.reset(y=4.2, u=-1.5)
     assert ctrl.operating_point == (-1.5, 4.2)
     assert ctrl.step(4.2, 4.2) == -1.5
+    ctrl.reset()                        # back to the design's point
+    assert ctrl.operating_point == (2.0, 10.0)
+    ctrl.reset(y=4.2)                   # u0 stays the design's
+    assert ctrl.operating_point == (2.0, 4.2)
 
 
 @pytest.mark.parametrize('loop', ['position', 'speed'])

@@ -71,7 +71,8 @@ def feedforward_checked(ctrl, design, model, ff_model, r):
     times too large). `design(**kw)` is the same design with the keywords
     kw changed; `ff_model` whether ctrl's feedforward inverts the
     sandwich's mbar L1 L2 (else the baseline)."""
-    bare = design(feedforward=None)
+    bare = design(feedforward=None, band_fraction=None, smoothing=None,
+                  jump_samples=None, adapt=None)
     e, e_bare = loop_error(ctrl, model, r), loop_error(bare, model, r)
     if e <= HARM * e_bare:
         return ctrl

@@ -27,11 +27,17 @@ def check_plant_tf(name, sys):
     the module notes); `name` says which in an error."""
     if not isinstance(sys, ct.TransferFunction) or not sys.issiso() or \
             not sys.isdtime(strict=True):
+        what = type(sys).__name__
+        if isinstance(sys, ct.TransferFunction):
+            what = (f"a TransferFunction with {sys.ninputs} input(s) and "
+                    f"{sys.noutputs} output(s)" if not sys.issiso() else
+                    f"a TransferFunction with dt={sys.dt!r} (not "
+                    f"discrete-time; discretize it with ct.c2d or "
+                    f"sys.sample)")
         raise TypeError(
             f"{name} must be a sandwichctl.SandwichSystem, a discrete SISO "
             f"control.TransferFunction, or an identification result "
-            f"holding one (sw.identify / sw.identify_linear); got "
-            f"{type(sys).__name__}")
+            f"holding one (sw.identify / sw.identify_linear); got {what}")
     num, den = sys.num[0][0].astype(float), sys.den[0][0].astype(float)
     num = np.trim_zeros(num, 'f')
     if num.size == 0 or not np.all(np.isfinite(num)) or \

@@ -109,9 +109,21 @@ def _check_loop(plant, controller, compensator,
 
 
 def closed_loop_response(plant, reference, controller, compensator=None):
-    r"""Fast simulation of a sandwich plant under tracking control.
+    r"""Fast simulation of a closed loop: a servo controller on any plant,
+    or a sandwich plant under tracking control.
 
-    The loop is ``u = comp[C(z)(r - y) + F(z) r_ahead]`` (without `comp`:
+    **With a** `ServoController` (from `servo_controller`) the plant is a
+    `SandwichSystem`, a discrete SISO ``ct.TransferFunction`` or any object
+    with a ``step(u) -> y`` method (a simulator of one's own, or
+    hardware in the loop; optional ``reset()`` and ``read() -> y(0)`` are
+    called first, and a numeric ``dt`` attribute must equal the
+    controller's). The controller is reset, then at every sample
+    ``u(k) = controller.step(r(k + preview), y(k))``, exactly as stepping
+    it by hand. The result has the outputs y and u.
+
+    **With a** `TrackingController` (the paper's design), the plant is a
+    `SandwichSystem` and the loop is
+    ``u = comp[C(z)(r - y) + F(z) r_ahead]`` (without `comp`:
     ``u = C(z)(r - y) + F(z) r_ahead``), where r_ahead(k) = r(k + d) is the
     reference ``controller.preview`` samples ahead, held at its last value
     past the end. All systems start at rest. The result equals
@@ -121,20 +133,24 @@ def closed_loop_response(plant, reference, controller, compensator=None):
 
     Parameters
     ----------
-    plant : SandwichSystem
-        The (true) plant, with q1 + q2 >= 1.
+    plant : SandwichSystem, TransferFunction or object with step(u)
+        The (true) plant, with at least one sample of delay from u to y
+        (a TransferFunction or an object with ``step`` only with a
+        `ServoController`).
     reference : array_like, shape (N,)
         Reference r(0), ..., r(N-1).
-    controller : TrackingController
-        From `tracking_controller`.
+    controller : ServoController or TrackingController
+        From `servo_controller`, or from `tracking_controller`.
     compensator : SandwichCompensator, optional
-        From `sandwich_compensator`, placed between controller and plant.
+        From `sandwich_compensator`, placed between a `TrackingController`
+        and the plant (a `ServoController` carries its own).
 
     Returns
     -------
     control.TimeResponseData
-        Input r; outputs y, u, x, v (plant output, plant input, and the
-        plant's internal backlash input and output).
+        Input r; outputs y and u with a `ServoController`; with a
+        `TrackingController` y, u, x, v (plant output, plant input, and
+        the plant's internal backlash input and output).
 
     Raises
     ------
@@ -200,7 +216,13 @@ def _servo_response(plant, reference, ctrl, compensator):
                              "from u to y: without it the loop is algebraic")
         name = plant.name
     elif callable(getattr(plant, 'step', None)):
-        dt = ctrl.dt
+        own, dt = getattr(plant, 'dt', None), ctrl.dt
+        if isinstance(own, (int, float, np.integer, np.floating)) and \
+                not isinstance(own, (bool, np.bool_)) and dt is not True \
+                and not np.isclose(own, dt, rtol=1e-9, atol=0.0):
+            raise ValueError(f"plant and controller must have the same "
+                             f"sampling time; got plant.dt={own!r} and "
+                             f"controller dt={dt!r}")
         name = type(plant).__name__
     else:
         raise TypeError(

@@ -45,6 +45,7 @@ import numpy as np
 from .compensator import SandwichCompensator
 from .servo import ServoController
 from ._export_adapt import blend_body, guard_parts
+from ._export_blocks import Block as _Block
 from ._servo_kernel import NSCALAR, SCALARS
 from ..model.sandwich import SandwichSystem
 
@@ -180,40 +181,6 @@ class _Writer:
                 f"{{\n    {body}\n}};")
 
 
-class _Block:
-    """A SISO state-space block: (A, B, C, D) of n states."""
-
-    def __init__(self, tag, what, n, A, B, C, D):
-        self.tag, self.what, self.n = tag, what, n
-        self.A, self.B, self.C = (np.ravel(M) for M in (A, B, C))
-        self.D = float(np.ravel(D)[0])
-
-    @classmethod
-    def packed(cls, tag, what, p, off, n):
-        """The block at offset `off` of packed parameters (A, B, C, D)."""
-        a, b, c = off, off + n * n, off + n * n + n
-        return cls(tag, what, n, p[a:b], p[b:c], p[c:c + n],
-                   p[c + n:c + n + 1])
-
-    def constants(self, w):
-        head = f"/* {self.what}: {self.n} state(s) */"
-        if self.n == 0:
-            return [head, w.const(f"{self.tag}_D", self.D)]
-        return [head, w.array(f"{self.tag}_A", self.A, self.n),
-                w.array(f"{self.tag}_B", self.B, self.n),
-                w.array(f"{self.tag}_C", self.C, self.n),
-                w.const(f"{self.tag}_D", self.D)]
-
-    def call(self, w, u):
-        """C expression: the block's output for input u (it also advances
-        the block's states, s->tag)."""
-        t = f"{w.name}_{self.tag}"
-        if self.n == 0:
-            return f"{t}_D * {u}"
-        return (f"{w.name}_block({t}_A, {t}_B, {t}_C, {t}_D,\n"
-                f"        {self.n}, s->{self.tag}, {u})")
-
-
 def _block_function(w, nmax):
     T = w.T
     pad = ' ' * len(f"static {T} {w.name}_block(")
@@ -336,6 +303,8 @@ def _servo_parts(ctrl, w):
     preview, lead = int(ix[0]), int(ix[1])
     compensate = bool(ix[5])
     sc = dict(zip(SCALARS, p[int(ix[9]):int(ix[9]) + NSCALAR]))
+    # name_reset restores the design's operating point, as reset() does
+    sc['u0'], sc['y0'] = ctrl._design['operating_point']
     fb = _Block.packed('fb', 'feedback C(z), error r(k) - y(k) -> u_fb',
                        p, int(ix[6]), int(ix[2]))
     pre = _Block.packed('pre', 'pre-inverse, r_ahead -> w (the backlash '
@@ -351,6 +320,10 @@ def _servo_parts(ctrl, w):
     ps = _Block.packed('ps', "process sensitivity P / (1 + C P), the band "
                        "path's output -> the regressor of its gain", p,
                        int(ix[13]), int(ix[12]))
+    if w.T == 'float':
+        # a realization whose coefficients survive the rounding
+        fb, pre, post, lin, oth, ps = (b.for_float() for b in
+                                       (fb, pre, post, lin, oth, ps))
     T, n = w.T, w.name
     members = []
     if preview:
@@ -488,6 +461,8 @@ def _compensator_parts(comp, w):
     A, B, C, D = comp.linear_matrices
     L1 = _Block('l1', "L1's inverse z^-q1 L1^-1, x_d -> u", A.shape[0],
                 A, B, C, D)
+    if w.T == 'float':
+        L1 = L1.for_float()
     T, n = w.T, w.name
     members = [(f"{T} x_prev;", 'backlash inverse: x(k-1)'),
                (f"{T} v_prev;", 'backlash inverse: v_hat(k-1)')]
@@ -519,7 +494,7 @@ def _usage(obj, w):
     paragraphs (wrapped later) and indented lines."""
     n = w.name
     if isinstance(obj, ServoController):
-        u0, y0 = obj.operating_point
+        u0, y0 = obj._design['operating_point']
         return [
             f"Use: one {n}_state per axis (static or on the stack), "
             f"{n}_reset(&s) once, then once per sample, every dt:",
@@ -706,7 +681,9 @@ def export_c(obj, directory, name='servo', dtype='double'):
     dtype : {'double', 'float'}, optional
         Arithmetic of the generated code (default 'double'); 'float' is
         for microcontrollers without a double-precision FPU, with the
-        coefficients rounded to float.
+        coefficients rounded to float and each linear block in the
+        realization whose float response strays least from double
+        (docs/deploy.md).
 
     Returns
     -------

@@ -13,8 +13,10 @@ physically simulated drive of ``sandwichctl.data.ServoDrive``.
 Which linear model
 ------------------
 A known model (a `SandwichSystem` given directly) is inverted exactly:
-:math:`L_1^{-1} B^{-1} L_2^{-1}` along the reference, and the PID is
-designed on :math:`\bar m L_1 L_2`. For an identification result, the PID
+:math:`L_1^{-1} B^{-1} L_2^{-1}` along the reference, over the share of
+the band that ``band_fraction`` asks (0.25 by default, as for a model
+from data: pass 1.0 where the model is the plant, as in a simulation
+study), and the PID is designed on :math:`\bar m L_1 L_2`. For an identification result, the PID
 is designed on its linear baseline fit (the loop in the holds is then the
 linear design's), and the feedforward inverts the sandwich's own
 :math:`\bar m L_1 L_2` when it is the clearly better model (see
@@ -207,10 +209,14 @@ class ServoController(ct.NonlinearIOSystem):
             For a bumpless start on a running axis: the measured y and
             the u being applied now become the operating point, so that
             the controller starts at u with the reference taken as y.
-            Without them the operating point given at design is kept.
+            Without them the operating point given at design is restored
+            (and one not given is the design's).
         """
         self._s[:] = 0.0
         sc = self._ix[IX_SCALAR]
+        # the operating point given at design, then the one asked for now
+        self._p[sc + NSCALAR - 2:sc + NSCALAR] = \
+            self._design['operating_point']
         if y is not None:
             self._p[sc + NSCALAR - 1] = check_finite('y', y)
         if u is not None:
@@ -369,7 +375,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         over-compensated on drives of ``benchmarks/bench_servo.py``. A
         default compensation that makes the loop around the identified
         model itself 1.25 times worse is turned off, and the notes say
-        so.
+        so. Where the model is the plant (a known model in a simulation
+        study), 1.0 compensates the whole band.
     smoothing : float, optional
         Smoothing width of the inverse in the model's v (default 2 % of
         the compensated band).
@@ -503,8 +510,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         return data if crossover_limit is None or not data else data[:2] + (0,)
     max_preview = check_int('max_preview', max_preview, 0, MAX_ORDER)
     name = check_name('name', name)
-    if (not isinstance(operating_point, (tuple, list))
-            or len(operating_point) != 2):
+    if isinstance(operating_point, (str, bytes)) or \
+            np.ndim(operating_point) != 1 or np.size(operating_point) != 2:
         raise ValueError(f"operating_point must be a pair (u0, y0); got "
                          f"{operating_point!r}")
     u0, y0 = (check_finite('operating_point', v) for v in operating_point)
@@ -568,6 +575,15 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                   _fb=_ss(C.num[0][0], C.den[0][0], dt))
     zero = _ss([0.0], [1.0], dt)
     comp = isinstance(model, SandwichSystem) and feedforward is not None
+    unused = [k for k, v in (('band_fraction', band_fraction),
+                             ('smoothing', smoothing),
+                             ('jump_samples', jump_samples),
+                             ('adapt', adapt or None)) if v is not None]
+    if unused and not comp:
+        raise ValueError(
+            f"{', '.join(unused)} set the backlash compensation, and "
+            + ("a linear model has none" if feedforward is not None else
+               "feedforward=None turns it off") + ": leave them out")
     pre = post = zero
     lead, jump, band_fraction_out, smoothing_out = 0, 0, 0.0, 0.0
     ps, adapts = zero, False
