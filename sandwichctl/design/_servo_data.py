@@ -67,11 +67,15 @@ def crossover_limit(bands, num, den):
         return base, 'the default, for a model without data'
     wb = bandwidth(num, den, frequency_grid(den))
     trusted = trusted_band(bands)
-    limit = float(np.clip(trusted / wb, base, CROSSOVER_MOST))
+    ratio = trusted / wb
+    limit = float(np.clip(ratio, base, CROSSOVER_MOST))
     return limit, (
         f"the data's residuals put the model's relative error below "
-        f"{TRUSTED:g} up to {trusted / wb:.3g} plant bandwidths "
-        f"(limit {base:g} to {CROSSOVER_MOST:g})")
+        f"{TRUSTED:g} up to {ratio:.3g} plant bandwidths ("
+        + (f"below the least limit, {base:g}, which holds" if ratio < base
+           else f"above the largest, {CROSSOVER_MOST:g}, which holds"
+           if ratio > CROSSOVER_MOST else
+           f"within the limits {base:g} to {CROSSOVER_MOST:g}") + ")")
 
 
 def measured_response(base, rel):
