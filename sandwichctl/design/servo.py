@@ -16,11 +16,11 @@ A known model (a `SandwichSystem` given directly) is inverted exactly:
 :math:`L_1^{-1} B^{-1} L_2^{-1}` along the reference, over the share of
 the band that ``band_fraction`` asks (0.25 by default, as for a model
 from data: pass 1.0 where the model is the plant, as in a simulation
-study), and the PID is designed on :math:`\bar m L_1 L_2`. For an identification result, the PID
-is designed on its linear baseline fit (the loop in the holds is then the
-linear design's), and the feedforward inverts the sandwich's own
-:math:`\bar m L_1 L_2` when it is the clearly better model (see
-``feedforward_from``), else the baseline. When L2 integrates (a valve's
+study), and the PID is designed on :math:`\bar m L_1 L_2`. For an
+identification result, the PID is designed on its linear baseline fit
+(the loop in the holds is then the linear design's), and the feedforward
+inverts the sandwich's own :math:`\bar m L_1 L_2` when it is the clearly
+better model (see ``feedforward_from``), else the baseline. When L2 integrates (a valve's
 play before a cylinder) both are designed on :math:`\bar m L_1 L_2`: no
 linear model follows the drift the play puts through an integrator after
 it, and the baseline spends a slow pole and zero on it (see
