@@ -105,16 +105,19 @@ class Block:
         return out
 
     def _schur(self):
-        """The block in real Schur form, or None."""
+        """The block in real Schur form (an orthogonal change of
+        states)."""
         T, Z = schur(self.A.reshape(self.n, self.n), output='real')
         return self._similar(Z, Z.T)
 
     def _balanced(self):
-        """The block balanced (square-root method), without the states
-        whose Hankel singular values are below `TRUNCATE` of the largest
-        (a near-cancelled pole and zero: their share of the output is far
-        below a float's precision); None where a pole is on or outside the
-        unit circle."""
+        """The block balanced (square-root method, on the gramians of the
+        block with B and C scaled to unit norm: balanced up to one common
+        scale of the states), without the states whose Hankel singular
+        values are below `TRUNCATE` of the largest (a near-cancelled pole
+        and zero: their share of the output is far below a float's
+        precision); None where a pole is on or outside the unit circle,
+        or where the gramians cannot be factored."""
         A = self.A.reshape(self.n, self.n)
         if not np.max(np.abs(np.linalg.eigvals(A))) < STABLE:
             return None
