@@ -46,7 +46,7 @@ from .compensator import SandwichCompensator
 from .servo import ServoController
 from ._export_adapt import blend_body, guard_parts
 from ._export_blocks import Block as _Block
-from ._servo_kernel import NSCALAR, SCALARS
+from ._servo_kernel import IX, NSCALAR, SCALARS
 from ..model.sandwich import SandwichSystem
 
 __all__ = ['export_c']
@@ -299,27 +299,27 @@ static void {n}_inverse({T} v_d, {T} *x_prev, {T} *v_prev)
 def _servo_parts(ctrl, w):
     """(state members, constants, step body, extra prototypes, reset
     body) of a ServoController."""
-    p, ix = ctrl._p, ctrl._ix
-    preview, lead = int(ix[0]), int(ix[1])
-    compensate = bool(ix[5])
-    sc = dict(zip(SCALARS, p[int(ix[9]):int(ix[9]) + NSCALAR]))
+    p = ctrl._p
+    at = dict(zip(IX, (int(v) for v in ctrl._ix)))     # the layout by name
+    preview, lead = at['preview'], at['lead']
+    compensate = bool(at['compensate'])
+    sc = dict(zip(SCALARS, p[at['off_scalar']:at['off_scalar'] + NSCALAR]))
     # name_reset restores the design's operating point, as reset() does
     sc['u0'], sc['y0'] = ctrl._design['operating_point']
-    fb = _Block.packed('fb', 'feedback C(z), error r(k) - y(k) -> u_fb',
-                       p, int(ix[6]), int(ix[2]))
-    pre = _Block.packed('pre', 'pre-inverse, r_ahead -> w (the backlash '
-                        'output wanted)', p, int(ix[7]), int(ix[3]))
-    post = _Block.packed('post', 'post-inverse, x -> u_post', p,
-                         int(ix[8]), int(ix[4]))
-    lin = _Block.packed('lin', 'linear feedforward, r_ahead -> u_lin', p,
-                        int(ix[11]), int(ix[10]))
-    adapts, blends = bool(ix[14]), bool(ix[17])
-    oth = _Block.packed('oth', 'the other linear feedforward, r_ahead -> '
-                        'u_other (blended in online)', p, int(ix[16]),
-                        int(ix[15]))
-    ps = _Block.packed('ps', "process sensitivity P / (1 + C P), the band "
-                       "path's output -> the regressor of its gain", p,
-                       int(ix[13]), int(ix[12]))
+
+    def block(tag, what, part):
+        return _Block.packed(tag, what, p, at['off_' + part], at['n_' + part])
+
+    fb = block('fb', 'feedback C(z), error r(k) - y(k) -> u_fb', 'fb')
+    pre = block('pre', 'pre-inverse, r_ahead -> w (the backlash output '
+                'wanted)', 'pre')
+    post = block('post', 'post-inverse, x -> u_post', 'post')
+    lin = block('lin', 'linear feedforward, r_ahead -> u_lin', 'lin')
+    adapts, blends = bool(at['adapt']), bool(at['blend'])
+    oth = block('oth', 'the other linear feedforward, r_ahead -> u_other '
+                '(blended in online)', 'other')
+    ps = block('ps', "process sensitivity P / (1 + C P), the band path's "
+               "output -> the regressor of its gain", 'ps')
     if w.T == 'float':
         # a realization whose coefficients survive the rounding
         fb, pre, post, lin, oth, ps = (b.for_float() for b in
