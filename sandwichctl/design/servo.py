@@ -297,7 +297,8 @@ class ServoController(ct.NonlinearIOSystem):
 
     def __repr__(self):
         m = self.margins
-        head = (f"ServoController({'sandwich' if self.compensates else 'linear'}"
+        kind = 'sandwich' if self.compensates else 'linear'
+        head = (f"ServoController({kind}"
                 f", dt={self.dt:g}, preview={self.preview}, "
                 f"kp={self.kp:.4g}, ki={self.ki:.4g}, kd={self.kd:.4g}, "
                 f"modulus_margin={m['modulus']:.3f}, "
