@@ -422,3 +422,20 @@ def test_auto_integrators_never_below_the_integrator_free_linear_fit():
                               nf=o['na'] + o['nc'], nk=o['q1'] + o['q2'],
                               integrators=0)
     assert res.fit >= lin0.fit - 1e-6
+
+
+def test_an_optimiser_stopped_at_max_iter_says_how_to_let_it_run_on():
+    """A search cut short by max_iter fails with the remedy in its
+    message, and following it gives a converged success."""
+    case = sw.data.random_case(0, n=2000, snr=100)
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        short = sw.identify(case.u, case.y, **case.plant.orders, max_iter=2,
+                            tol=1e-15)
+        full = sw.identify(case.u, case.y, **case.plant.orders)
+    assert not short.success
+    assert "did not converge (a larger max_iter lets it run on)" in \
+        short.message
+    assert "stopped at max_iter = 2" in short.message
+    assert full.success, full.message
+    assert full.fit > short.fit

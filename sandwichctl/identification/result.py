@@ -98,7 +98,8 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
         fail('estimate', "the estimate is unstable or not finite (a pole "
                          "of L1 or L2 on or outside the unit circle)")
     if converged is False:
-        fail('converged', "the optimiser did not converge")
+        fail('converged', "the optimiser did not converge (a larger "
+                          "max_iter lets it run on)")
     if zeros_at_bound:
         fail('zeros', f"a zero of {' and '.join(zeros_at_bound)} ended on "
                       f"the search bound |z| = {zero_radius:.3g}: a "
