@@ -26,9 +26,11 @@ private switch ``_long.LONG_RECORD``):
 Run: python benchmarks/bench_long_records.py [--seeds 3] [--repeat 3]
      [--old-repeat 1] [--random-seeds 0 1] [--n-random 100000]
      [--baseline-seeds 0 1 2 3 4 5 6 7] [--arx-repeat 3]
-     [--serial-repeat 3]
+     [--serial-repeat 3] [--heads 20000 10000]
 (``--old-repeat 0``: the long-record path alone; ``--serial-repeat``
-adds rows of the long-record path on one thread, `_long.WORKERS` = 1.)
+adds rows of the long-record path on one thread, `_long.WORKERS` = 1;
+``--heads`` rows with the search on other numbers of leading samples,
+`_long.LONG_HEAD`.)
 """
 
 import argparse
@@ -78,15 +80,19 @@ class Counter:
 
 
 @contextlib.contextmanager
-def path(long, threshold=None, arx=False, serial=False):
+def path(long, threshold=None, arx=False, serial=False, head=None):
     """The long-record path (at `threshold`, default the library's) or
     the exhaustive search (``long=False``); with `arx`, the long-record
     path's baseline of all the samples from the ARX start (as before it
     started from the leading samples' fit); with `serial`, on one thread
-    (`_long.WORKERS` = 1)."""
+    (`_long.WORKERS` = 1); with `head`, the search on that many leading
+    samples (`_long.LONG_HEAD`)."""
     saved, carried, workers = (_long.LONG_RECORD, _long._carried_linear,
                                _long.WORKERS)
+    saved_head = _long.LONG_HEAD
     _long.LONG_RECORD = (threshold or saved) if long else np.inf
+    if head:
+        _long.LONG_HEAD = head
     if arx:
         _long._carried_linear = lambda *args: None
     if serial:
@@ -95,7 +101,7 @@ def path(long, threshold=None, arx=False, serial=False):
         yield
     finally:
         _long.LONG_RECORD, _long._carried_linear = saved, carried
-        _long.WORKERS = workers
+        _long.WORKERS, _long.LONG_HEAD = workers, saved_head
 
 
 def identify(u, y, orders):
@@ -120,18 +126,22 @@ def measure(u, y, plant, repeat, **kw):
 
 
 def rows_of(label, u, y, plant, args, threshold=None):
-    """Two table rows, new and old path, of one record."""
+    """The table rows of one record, a row per path asked for."""
     out = []
-    for name, long, arx, serial, repeat in (
-            ('long-record', True, False, False, args.repeat),
-            ('long, one thread', True, False, True, args.serial_repeat),
-            ('long, ARX baseline', True, True, False, args.arx_repeat),
-            ('exhaustive', False, False, False, args.old_repeat)):
+    for name, long, arx, serial, head, repeat in (
+            [('long-record', True, False, False, None, args.repeat),
+             ('long, one thread', True, False, True, None,
+              args.serial_repeat),
+             ('long, ARX baseline', True, True, False, None,
+              args.arx_repeat)]
+            + [(f'long, head {h:,}', True, False, False, h, args.repeat)
+               for h in args.heads]
+            + [('exhaustive', False, False, False, None, args.old_repeat)]):
         if not repeat:
             continue
         t, full, lengths, res, err = measure(
             u, y, plant, repeat, long=long, threshold=threshold, arx=arx,
-            serial=serial)
+            serial=serial, head=head)
         taken = res.long_record is not None
         out.append([label, f'{u.size:,}', name, 'yes' if taken else 'no',
                     repeat, f'{t:.2f} s', full, f'{lengths:.1f}',
@@ -222,6 +232,9 @@ def main():
     ap.add_argument('--serial-repeat', type=int, default=0,
                     help="also run the long-record path on one thread "
                     "(_long.WORKERS = 1)")
+    ap.add_argument('--heads', type=int, nargs='*', default=[],
+                    help="also run the long-record path with its search "
+                    "on these many leading samples (_long.LONG_HEAD)")
     args = ap.parse_args()
     print(f"Long records; {os.cpu_count()} cores, load average "
           f"{os.getloadavg()[0]:.2f} at the start; medians of repeated runs "
