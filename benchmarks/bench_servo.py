@@ -114,6 +114,17 @@ def run(ctrl, r, loop, play, dt, params, seed):
     return m
 
 
+def quiet_hunting(ctrl, m, r, loop, play, dt, params, seed):
+    """The reversals of a design that hunts (`m`, its metrics on the
+    drive) run again without the drive's torque disturbance: a limit cycle
+    hunts there too, the disturbance's jitter of a few encoder counts does
+    not. 0 where it did not hunt (not run again)."""
+    if m['hunting'] < 3:
+        return 0
+    return run(ctrl, r, loop, play, dt, {**params, 'torque_noise': 0.0},
+               seed)['hunting']
+
+
 def cases(seeds, randoms, loops, seed0=0, random0=0):
     for loop in loops:
         for seed in range(seed0, seed0 + seeds):
@@ -321,11 +332,9 @@ def main():
             for what, p_play, p_params in mismatched(play, params):
                 a = run(c_lin, r, loop, p_play, dt, p_params, seed + 500)
                 b = run(c_sw, r, loop, p_play, dt, p_params, seed + 500)
-                # as above: a limit cycle hunts without the disturbance too
-                quiet = [run(c, r, loop, p_play, dt,
-                             {**p_params, 'torque_noise': 0.0},
-                             seed + 500)['hunting'] if m['hunting'] >= 3
-                         else 0 for c, m in ((c_lin, a), (c_sw, b))]
+                quiet = [quiet_hunting(c, m, r, loop, p_play, dt, p_params,
+                                       seed + 500)
+                         for c, m in ((c_lin, a), (c_sw, b))]
                 mism.append([label, f"{play * 1e6:.0f}", what,
                              f"{a['rms'] * 1e6:.1f}", a['hunting'],
                              f"{a['guard']:.2g}",
@@ -348,12 +357,8 @@ def main():
                 row.append(f"{got[0]['rms'] * 1e6:.2f} / {got[0]['hunting']}"
                            f" / {max(m['hunting'] for m in got[1:])}")
             scaled_rows.append(row)
-        # a design that hunts runs again without the drive's torque
-        # disturbance: a limit cycle hunts there too, the disturbance's
-        # jitter of a few encoder counts does not
-        quiet = {name: run(c, r, loop, play, dt,
-                           {**params, 'torque_noise': 0.0},
-                           seed + 500)['hunting']
+        quiet = {name: quiet_hunting(c, m, r, loop, play, dt, params,
+                                     seed + 500)
                  for name, c, m in (('lin', c_lin, m_lin), ('sw', c_sw, m_sw))
                  if m['hunting'] >= 3}
         checks.append(dict(label=label, loop=loop, play=play, lin=m_lin,

@@ -20,15 +20,15 @@ study), and the PID is designed on :math:`\bar m L_1 L_2`. For an
 identification result, the PID is designed on its linear baseline fit
 (the loop in the holds is then the linear design's), and the feedforward
 inverts the sandwich's own :math:`\bar m L_1 L_2` when it is the clearly
-better model (see ``feedforward_from``), else the baseline. When L2 integrates (a valve's
-play before a cylinder) both are designed on :math:`\bar m L_1 L_2`: no
-linear model follows the drift the play puts through an integrator after
-it, and the baseline spends a slow pole and zero on it (see
-``feedback_from``); so they are when the baseline's low-frequency gain
-has the sign opposite to the sandwich's (such a pair flipped it). The
-band offset of the inverse reaches the plant through the DC gains of L1
-and L2 (their fitted fast dynamics, inverted, would turn the offset's
-jump into ringing).
+better model (see ``feedforward_from``), else the baseline. When L2
+integrates (a valve's play before a cylinder) both are designed on
+:math:`\bar m L_1 L_2`: no linear model follows the drift the play puts
+through an integrator after it, and the baseline spends a slow pole and
+zero on it (see ``feedback_from``); so they are when the baseline's
+low-frequency gain has the sign opposite to the sandwich's (such a pair
+flipped it). The band offset of the inverse reaches the plant through
+the DC gains of L1 and L2 (their fitted fast dynamics, inverted, would
+turn the offset's jump into ringing).
 
 Why the backlash inverse sits in the feedforward
 ------------------------------------------------
