@@ -511,7 +511,11 @@ def _as_real_scalar(name, value):
             raise TypeError(f"{name} must be a real number; got "
                             f"{type(value).__name__} {value!r}")
         value = arr.item()
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:
+        raise ValueError(f"{name} is too large for a float; got "
+                         f"{value!r:.40}...") from None
 
 
 def _is_str(value):

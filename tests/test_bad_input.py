@@ -66,6 +66,20 @@ class _OddPlant:
         return self.value
 
 
+def _Result(**fields):
+    """An object that passes for an identification result of PLANT."""
+    import types
+    return types.SimpleNamespace(model=PLANT, success=True, **fields)
+
+
+class _DtPlant(_OddPlant):
+    """A user plant with a `dt` attribute."""
+
+    def __init__(self, dt):
+        super().__init__(0.0)
+        self.dt = dt
+
+
 def _nan_at(k, n=N):
     x = np.ones(n)
     x[k] = np.nan
@@ -624,7 +638,47 @@ ROWS = [
     ('ServoController-step',
      lambda t: sw.servo_controller(PLANT).step(0.0, np.nan), VE, 'finite'),
     ('ServoController-step-overflow',
-     lambda t: _steps_to_overflow(), OverflowError, 'reset'),
+     lambda t: _steps_to_overflow(), OverflowError, 'memory is unchanged'),
+    ('ServoController-step-huge-int',
+     lambda t: sw.servo_controller(PLANT).step(10 ** 400, 0.0), VE,
+     'r_ahead is too large'),
+    ('ServoController-reset-positional',
+     lambda t: sw.servo_controller(PLANT).reset(1.0, 2.0), TE, 'positional'),
+    ('ServoController-direct',
+     lambda t: sw.ServoController({}), TE, 'servo_controller'),
+    ('ServoController-input_output_response-nan',
+     lambda t: ct.input_output_response(
+         sw.servo_controller(PLANT), np.arange(5.0),
+         np.vstack([_nan_at(2, 5), np.zeros(5)])), VE, 'finite'),
+    ('servo_controller-adapt-int',
+     lambda t: sw.servo_controller(PLANT, adapt=0), VE, 'adapt'),
+    ('servo_controller-modulus_margin-huge-int',
+     lambda t: sw.servo_controller(PLANT, modulus_margin=10 ** 400), VE,
+     'modulus_margin'),
+    ('servo_controller-feedback_from-linear-model',
+     lambda t: sw.servo_controller(L2 * L1, feedback_from='baseline'), VE,
+     'feedback_from'),
+    ('servo_controller-feedforward_from-linear-model',
+     lambda t: sw.servo_controller(L2 * L1, feedforward_from='model'), VE,
+     'feedforward_from'),
+    ('servo_controller-max_preview-without-feedforward',
+     lambda t: sw.servo_controller(PLANT, feedforward=None, max_preview=5),
+     VE, 'max_preview'),
+    ('servo_controller-result-linear-junk',
+     lambda t: sw.servo_controller(_Result(linear={'model': 'junk'})), VE,
+     r"linear\['model'\]"),
+    ('servo_controller-result-linear-not-dict',
+     lambda t: sw.servo_controller(_Result(linear=[1, 2])), VE,
+     'model.linear'),
+    ('servo_controller-result-residuals',
+     lambda t: sw.servo_controller(_Result(residuals='abc', yhat=U)), VE,
+     'model.residuals'),
+    ('servo_controller-result-error_bands',
+     lambda t: sw.servo_controller(_Result(linear={'error_bands': 'x'})), VE,
+     'error_bands'),
+    ('servo_controller-result-no-fits',
+     lambda t: sw.servo_controller(_Result(linear={'model': L2 * L1})), VE,
+     'feedforward_from'),
     ('ServoController-run-overflow',
      lambda t: sw.servo_controller(PLANT).run([1e308] * 4, [-1e308] * 4),
      OverflowError, 'sample 2'),
@@ -647,6 +701,27 @@ ROWS = [
      VE, 'name must be at most 200'),
     ('export_c-dtype', lambda t: sw.export_c(COMP, t, dtype='half'), VE,
      'dtype'),
+    ('export_c-name-header', lambda t: sw.export_c(COMP, t, name='errno'),
+     VE, 'shadows the standard header'),
+    ('export_c-directory-null', lambda t: sw.export_c(COMP, 'a\0b'), VE,
+     'directory'),
+    ('export_c-directory-long',
+     lambda t: sw.export_c(COMP, t / ('d' * 300)), VE, 'directory'),
+    ('export_c-header-is-folder',
+     lambda t: (t / 'servo.h').mkdir() or sw.export_c(COMP, t), VE,
+     'is a folder'),
+    ('closed_loop_response-servo-plant-dt-array',
+     lambda t: sw.closed_loop_response(_DtPlant(np.array(2.0)), U,
+                                       sw.servo_controller(PLANT)), VE,
+     'sampling time'),
+    ('closed_loop_response-servo-plant-dt-str',
+     lambda t: sw.closed_loop_response(_DtPlant('x'), U,
+                                       sw.servo_controller(PLANT)), TE,
+     'plant.dt'),
+    ('closed_loop_response-servo-overflow',
+     lambda t: sw.closed_loop_response(_DtPlant(1), np.full(N, 1e308),
+                                       sw.servo_controller(PLANT)),
+     OverflowError, 'not applied to the plant'),
     ('servo_reference-dt', lambda t: sw.servo_reference(0, 1.0), VE, 'dt'),
     ('servo_reference-travel',
      lambda t: sw.servo_reference(1e-3, np.nan), VE, 'travel'),
@@ -964,6 +1039,14 @@ ROWS = [
      lambda t: sw.data.drive_reference(100, dt=1e-308), VE, 'dt'),
     ('data.drive_case-n_val-huge',
      lambda t: sw.data.drive_case(0, n=100, n_val=BIG ** 2), VE, 'n_val'),
+    ('data.ServoDrive-substeps-coarse',
+     lambda t: sw.data.ServoDrive(k=5e10, substeps=1), VE, 'substeps'),
+    ('data.ServoDrive-light-platform',
+     lambda t: sw.data.ServoDrive(M=1e-4), VE, 'diverge'),
+    ('data.servo_drive-light-rotor',
+     lambda t: sw.data.servo_drive(U, J=1e-10), VE, 'diverge'),
+    ('data.ServoDrive-seed-bool',
+     lambda t: sw.data.ServoDrive(seed=True), TE, 'seed'),
     ('data.random_drive-seed', lambda t: sw.data.random_drive(-1), VE,
      'seed'),
     ('data.drive_reference-n',

@@ -101,6 +101,8 @@ def guard_scalars(hunting, result, num, den, C, notes):
     C P, P = num / den (all 0: no guard), with a note of the choice.
     `hunting` is None (a deadband from the result's record; no guard
     without one), False (none) or the deadband in y's units."""
+    if isinstance(hunting, np.bool_):
+        hunting = bool(hunting)
     if hunting is False:
         notes.append("no hunting guard (hunting=False)")
         return [0.0] * 5
@@ -119,12 +121,13 @@ def guard_scalars(hunting, result, num, den, C, notes):
         band, why = DEADBAND * noise, (f"{DEADBAND:g} times the record's "
                                        f"noise, {noise:.3g}")
     else:
-        if isinstance(hunting, (bool, np.bool_)) or \
-                not isinstance(hunting, (int, float, np.integer,
-                                         np.floating)):
+        try:
+            band = check_positive('hunting', hunting)
+        except TypeError:
             raise TypeError(f"hunting must be None, True, False or a "
-                            f"deadband in y's units; got {hunting!r}")
-        band, why = check_positive('hunting', hunting), "as asked"
+                            f"deadband in y's units; got {hunting!r}") \
+                from None
+        why = "as asked"
     wc = crossover(num, den, C)
     settle = float(min(SETTLE_MOST, math.ceil(SETTLE / wc)))
     gap = float(math.ceil(GAP * math.pi / wc))

@@ -1,25 +1,72 @@
 """What `servo_controller` accepts as its model: an identification
 result is unwrapped to its model, and a transfer function is checked for
 a design (discrete, SISO, strictly proper, stable or with one integrator,
-and a gain the design's squares do not overflow)."""
+and a gain the design's squares do not overflow); and its options."""
 
 import numpy as np
 import control as ct
 
 from . import _servo_design as sd
 from ..model.sandwich import SandwichSystem
-from .._checks import DATA_RANGE
+from .._checks import (DATA_RANGE, MAX_ORDER, check_finite, check_int,
+                       check_name, check_option, check_real)
 
 __all__ = []
 
 
 def unwrap_model(model):
-    """The model of a result, and the result itself (or None)."""
+    """The model of a result, and the result itself (or None); a result
+    whose fields the design reads are malformed is refused."""
     inner = getattr(model, 'model', None)
     if isinstance(inner, (SandwichSystem, ct.TransferFunction)) and \
             not isinstance(model, (SandwichSystem, ct.TransferFunction)):
+        _check_result(model)
         return inner, model
     return model, None
+
+
+def _check_result(result):
+    """ValueError naming the field of an identification result (or an
+    object that passes for one) that the design cannot read."""
+    for key in ('residuals', 'yhat'):
+        value = getattr(result, key, None)
+        if value is not None:
+            _arrays(f"model.{key}", [value], 1)
+    linear = getattr(result, 'linear', None)
+    if linear is None:
+        return
+    if not isinstance(linear, dict):
+        raise ValueError(f"model.linear must be a dict (the linear baseline "
+                         f"of an identification result); got "
+                         f"{type(linear).__name__}")
+    base = linear.get('model')
+    if base is not None and not isinstance(base, ct.TransferFunction):
+        raise ValueError(f"model.linear['model'] must be a TransferFunction "
+                         f"or None; got {type(base).__name__}")
+    fits = [('model.fit', getattr(result, 'fit', None)),
+            ("model.linear['fit']", linear.get('fit'))]
+    for where, value in fits + [("model.linear['noise']",
+                                 linear.get('noise'))]:
+        if value is not None:
+            check_real(where, value)
+    for key, count in (('error_bands', 2), ('relative_error', 3)):
+        value = linear.get(key)
+        if value is not None:
+            _arrays(f"model.linear[{key!r}]", value, count)
+
+
+def _arrays(where, parts, count):
+    """Require `count` numeric 1-D arrays of one length."""
+    try:
+        arrays = [np.asarray(part) for part in parts]
+    except (TypeError, ValueError):
+        arrays = []
+    if not (len(arrays) == count and all(
+            a.ndim == 1 and a.dtype.kind in 'iufc'
+            and a.size == arrays[0].size for a in arrays)):
+        raise ValueError(f"{where} must be {count} numeric 1-D array"
+                         f"{'s of one length' if count > 1 else ''} (as "
+                         f"identify returns it); got {parts!r:.80}")
 
 
 def check_plant_tf(name, sys):
@@ -72,3 +119,42 @@ def check_plant_tf(name, sys):
         # too high (random drive 18 of benchmarks/bench_servo.py)
         den = den[0] * np.real(np.poly(np.where(one, 1.0, poles)))
     return num, den
+
+
+#: samples of reference preview the feedforward may use by default
+MAX_PREVIEW = 20
+
+
+def check_options(modulus_margin, feedforward, feedforward_from,
+                  feedback_from, adapt, crossover_limit, max_preview, name,
+                  operating_point):
+    """`servo_controller`'s options checked: (modulus_margin, adapt,
+    crossover_limit, max_preview, name, (u0, y0)) as the design uses
+    them."""
+    mm = check_finite('modulus_margin', modulus_margin)
+    if not 0 < mm < 1:
+        raise ValueError(f"modulus_margin must be in (0, 1); got {mm!r}")
+    check_option('feedforward', feedforward, ('preview', 'zpetc', None))
+    for key, choice in (('feedforward_from', feedforward_from),
+                        ('feedback_from', feedback_from)):
+        check_option(key, choice, ('auto', 'model', 'baseline'))
+    adapt = bool(adapt) if isinstance(adapt, np.bool_) else adapt
+    if not (adapt is None or isinstance(adapt, bool)):    # 0 == False
+        raise ValueError(f"adapt must be one of None, True, False; got "
+                         f"{adapt!r}")
+    if crossover_limit is not None:
+        crossover_limit = check_finite('crossover_limit', crossover_limit)
+        if not 0.1 <= crossover_limit <= 1000:
+            raise ValueError(f"crossover_limit must be in [0.1, 1000] "
+                             f"plant bandwidths; got {crossover_limit!r}")
+    max_preview = check_int('max_preview', max_preview, 0, MAX_ORDER)
+    if feedforward is None and max_preview != MAX_PREVIEW:
+        raise ValueError("max_preview sets the feedforward's preview, and "
+                         "feedforward=None turns it off: leave it out")
+    name = check_name('name', name)
+    if isinstance(operating_point, (str, bytes)) or \
+            np.ndim(operating_point) != 1 or np.size(operating_point) != 2:
+        raise ValueError(f"operating_point must be a pair (u0, y0); got "
+                         f"{operating_point!r}")
+    u0, y0 = (check_finite('operating_point', v) for v in operating_point)
+    return mm, adapt, crossover_limit, max_preview, name, (u0, y0)

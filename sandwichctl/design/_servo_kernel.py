@@ -347,3 +347,11 @@ def servo_run(p, ix, s, r_ahead, y):
     for k in range(r_ahead.size):
         u[k] = servo_step(p, ix, s, r_ahead[k], y[k])
     return u
+
+
+@numba.njit(cache=True)
+def servo_step_kept(p, ix, s, keep, r_ahead, y):
+    """`servo_step` with the memory s copied to `keep` first, so that a
+    caller can put it back when u overflows."""
+    keep[:] = s
+    return servo_step(p, ix, s, r_ahead, y)

@@ -33,7 +33,13 @@ def feedforward_source(choice, result, integrating, zeros, max_preview):
     'baseline'; there is a baseline)."""
     if choice != 'auto':
         return choice == 'model', "as asked"
-    gap = result.fit - result.linear['fit']
+    fits = getattr(result, 'fit', None), result.linear.get('fit')
+    if any(fit is None for fit in fits):
+        raise ValueError("feedforward_from='auto' compares model.fit with "
+                         "model.linear['fit'] (percent), and the result "
+                         "has not both: give them, or pass "
+                         "feedforward_from='model' or 'baseline'")
+    gap = fits[0] - fits[1]
     # zeros outside the unit circle that the preview inverse can only
     # keep by their DC gain (sampling zeros on the negative real axis
     # it may keep so)

@@ -41,8 +41,8 @@ from .servo import ServoController
 from ._servo_design import frequency_grid, loop_gain, tf_arrays
 from ..model._kernel import _ss_output, _ss_update
 from ..model.sandwich import SandwichSystem, _warn_divergence
-from .._checks import (check_discrete_siso_tf, check_signal, common_dt,
-                       check_name, check_axes)
+from .._checks import (check_discrete_siso_tf, check_real, check_signal,
+                       common_dt, check_name, check_axes)
 
 __all__ = ['closed_loop_system', 'ClosedLoopSystem', 'closed_loop_response',
            'plot_loop']
@@ -217,12 +217,20 @@ def _servo_response(plant, reference, ctrl, compensator):
         name = plant.name
     elif callable(getattr(plant, 'step', None)):
         own, dt = getattr(plant, 'dt', None), ctrl.dt
-        if isinstance(own, (int, float, np.integer, np.floating)) and \
-                not isinstance(own, (bool, np.bool_)) and dt is not True \
-                and not np.isclose(own, dt, rtol=1e-9, atol=0.0):
-            raise ValueError(f"plant and controller must have the same "
-                             f"sampling time; got plant.dt={own!r} and "
-                             f"controller dt={dt!r}")
+        if own is not None and own is not True and not (
+                isinstance(own, np.bool_) and own):
+            # None and True (python-control's "some discrete time") say
+            # nothing; a number must be the controller's
+            try:
+                own = check_real('plant.dt', own)
+            except TypeError:
+                raise TypeError(f"plant.dt must be a number, True or None; "
+                                f"got {type(own).__name__} {own!r}") from None
+            if dt is not True and not np.isclose(own, dt, rtol=1e-9,
+                                                 atol=0.0):
+                raise ValueError(f"plant and controller must have the same "
+                                 f"sampling time; got plant.dt={own!r} and "
+                                 f"controller dt={dt!r}")
         name = type(plant).__name__
     else:
         raise TypeError(

@@ -64,6 +64,14 @@ _C_KEYWORDS = frozenset(
     'volatile while _Bool _Complex _Imaginary'.split())
 
 
+#: the standard headers of C99 and C11: a file <name>.h beside the user's
+#: code would shadow them (gcc searches -I folders first, even for <...>)
+_C_HEADERS = frozenset(
+    'assert complex ctype errno fenv float inttypes iso646 limits locale '
+    'math setjmp signal stdalign stdarg stdatomic stdbool stddef stdint '
+    'stdio stdlib stdnoreturn string tgmath threads time uchar wchar '
+    'wctype'.split())
+
 #: longest name: file names stop at 255 bytes on most file systems
 MOST_NAME = 200
 
@@ -82,7 +90,7 @@ def _check_name(name):
         raise ValueError(f"name must be at most {MOST_NAME} characters (it "
                          f"names the files {name[:8]}....h and .c); got "
                          f"{len(name)}")
-    if name in ('math', 'stddef', 'string'):
+    if name in _C_HEADERS:
         raise ValueError(f"name {name!r} would write {name}.h, which "
                          f"shadows the standard header <{name}.h>; choose "
                          f"another name")
@@ -94,11 +102,14 @@ def _check_directory(directory):
         raise TypeError(f"directory must be a path (str or pathlib.Path); "
                         f"got {type(directory).__name__} {directory!r}")
     path = Path(directory)
-    if path.exists() and not path.is_dir():
-        raise ValueError(f"directory {str(path)!r} is a file, not a folder")
     try:
+        if path.exists() and not path.is_dir():
+            raise ValueError(f"directory {str(path)!r} is a file, not a "
+                             f"folder")
         path.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
+    except (OSError, ValueError) as exc:   # a null byte, a name too long
+        if str(exc).startswith('directory '):
+            raise
         raise ValueError(f"directory {str(path)!r} cannot be created: "
                          f"{exc}") from None
     if not os.access(path, os.W_OK | os.X_OK):
@@ -670,8 +681,10 @@ def export_c(obj, directory, name='servo', dtype='double'):
     ----------
     obj : ServoController or SandwichCompensator
         What to export (``sw.servo_controller(...)`` or
-        ``sw.sandwich_compensator(...)``), with its current operating
-        point.
+        ``sw.sandwich_compensator(...)``). A controller's ``name_reset``
+        restores the operating point of its design, as ``ctrl.reset()``
+        does; one taken by ``ctrl.reset(y=..., u=...)`` is set on the
+        target by ``name_reset_at``.
     directory : str or pathlib.Path
         Folder for the two files (created if missing; files of the same
         name are overwritten).
@@ -756,6 +769,10 @@ def export_c(obj, directory, name='servo', dtype='double'):
              else _compensator_parts)(obj, w)
     members, consts, functions, signature, body, reset = parts
     header, source = folder / f"{name}.h", folder / f"{name}.c"
+    for path in (header, source):
+        if path.is_dir():
+            raise ValueError(f"{str(path)!r} is a folder; export with "
+                             f"another name or into another directory")
     header.write_text(_header(obj, w, members, signature), encoding='ascii')
     source.write_text(_source(obj, w, consts, functions, signature, body,
                               reset), encoding='ascii')

@@ -115,6 +115,12 @@ def servo_loop(plant, r, ctrl):
                 f"the plant returned y = {yk!r} at sample {k} "
                 f"({'read' if k == 0 else 'step'}); the loop stops there")
         uk = servo_step(ctrl._p, ctrl._ix, ctrl._s, r_ahead[k], yk)
+        if not math.isfinite(uk):
+            raise OverflowError(
+                f"u overflowed at sample {k} (y = {yk!r}, r_ahead = "
+                f"{float(r_ahead[k])!r}): too large for the controller's gains, "
+                f"so it was not applied to the plant (scale the data as the "
+                f"design's model was identified)")
         y[k], u[k] = yk, uk
         if k + 1 < n:
             yk = _measured(_call(plant.step, 'step(u)', k + 1, uk),

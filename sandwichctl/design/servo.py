@@ -84,15 +84,16 @@ from . import _servo_linear as sl
 from ._servo_checks import (HARM, activity_ratio, feedforward_checked,
                             helps_on_model, scalar_index)
 from ._servo_guard import guard_scalars
-from ._servo_inputs import check_plant_tf, unwrap_model
-from ._servo_kernel import (pack, servo_step, servo_run, adapt_index,
+from ._servo_inputs import (MAX_PREVIEW, check_options, check_plant_tf,
+                            unwrap_model)
+from ._servo_kernel import (pack, servo_step, servo_step_kept, servo_run,
+                            adapt_index,
                             rest_scalars, BAND, GUARD, INVERSE, NSCALAR,
                             IX_ADAPT, IX_BLEND, IX_GUARD, IX_SCALAR)
 from .loop import ss_arrays
 from ..model.sandwich import SandwichSystem
-from .._checks import (MAX_ORDER, PLAIN_REALS, check_finite,
-                       check_int, check_name, check_nonnegative,
-                       check_option, check_positive, check_real,
+from .._checks import (MAX_ORDER, PLAIN_REALS, check_finite, check_int,
+                       check_nonnegative, check_positive, check_real,
                        check_signal)
 
 
@@ -184,6 +185,10 @@ class ServoController(ct.NonlinearIOSystem):
     """
 
     def __init__(self, design, name=None):
+        if not (isinstance(design, dict) and '_fb' in design):
+            raise TypeError(f"a ServoController is built by "
+                            f"sw.servo_controller(model, ...); got "
+                            f"ServoController({type(design).__name__})")
         self._design = design
         self.__dict__.update({k: v for k, v in design.items()
                               if not k.startswith('_')})
@@ -195,61 +200,69 @@ class ServoController(ct.NonlinearIOSystem):
                              design['blends'])
         self._p, self._ix = p, ix
         self._s = np.zeros(nstate)
+        self._keep = np.zeros(nstate)       # the memory before a step
         super().__init__(self._update, self._output,
                          inputs=['r_ahead', 'y'], outputs=['u'],
                          states=nstate, dt=design['dt'], name=name)
 
     # --- the per-sample interface -------------------------------------
-    def reset(self, y=None, u=None):
+    def reset(self, *, y=None, u=None):
         """Back to rest: every internal state zero.
 
         Parameters
         ----------
-        y, u : float, optional
+        y, u : float, optional (keywords)
             For a bumpless start on a running axis: the measured y and
             the u being applied now become the operating point, so that
             the controller starts at u with the reference taken as y.
             Without them the operating point given at design is restored
-            (and one not given is the design's).
+            (and one not given is the design's). Both are checked before
+            anything changes: a bad value raises with the controller as
+            it was.
         """
+        u0, y0 = self._design['operating_point']
+        if y is not None:
+            y0 = check_finite('y', y)
+        if u is not None:
+            u0 = check_finite('u', u)
         self._s[:] = 0.0
         sc = self._ix[IX_SCALAR]
-        # the operating point given at design, then the one asked for now
-        self._p[sc + NSCALAR - 2:sc + NSCALAR] = \
-            self._design['operating_point']
-        if y is not None:
-            self._p[sc + NSCALAR - 1] = check_finite('y', y)
-        if u is not None:
-            self._p[sc + NSCALAR - 2] = check_finite('u', u)
-        self.operating_point = (float(self._p[sc + NSCALAR - 2]),
-                                float(self._p[sc + NSCALAR - 1]))
+        self._p[sc + NSCALAR - 2:sc + NSCALAR] = u0, y0
+        self.operating_point = (float(u0), float(y0))
 
     def step(self, r_ahead, y):
         """One sample: the reference `preview` samples ahead and the y(k)
         just measured in; u(k) out. A value that is not finite raises
         before the memory is touched, so one bad reading does not poison
         every later sample."""
-        # a float or an int goes straight on (about 1 us a step)
-        r = (float(r_ahead) if type(r_ahead) in PLAIN_REALS else
-             check_real('r_ahead', r_ahead))
-        yk = float(y) if type(y) in PLAIN_REALS else check_real('y', y)
+        # a float or an int goes straight on (about 1 us a step); an int
+        # too large for a float takes check_real's way to its error
+        try:
+            r = (float(r_ahead) if type(r_ahead) in PLAIN_REALS else
+                 check_real('r_ahead', r_ahead))
+            yk = float(y) if type(y) in PLAIN_REALS else check_real('y', y)
+        except OverflowError:
+            r, yk = check_real('r_ahead', r_ahead), check_real('y', y)
         if not (math.isfinite(r) and math.isfinite(yk)):
             raise ValueError(f"r_ahead and y must be finite; got "
                              f"r_ahead={r!r}, y={yk!r} (the controller's "
                              f"memory is unchanged)")
-        u = servo_step(self._p, self._ix, self._s, r, yk)
+        u = servo_step_kept(self._p, self._ix, self._s, self._keep, r, yk)
         if not math.isfinite(u):
+            self._s[:] = self._keep
             _overflow(None)
         return u
 
     def run(self, r_ahead, y):
         """`step` over given sequences from the current memory (open loop:
         y is recorded, not simulated); returns u."""
-        u = servo_run(self._p, self._ix, self._s,
-                      check_signal('r_ahead', r_ahead),
-                      check_signal('y', y, np.size(r_ahead)))
+        r_ahead = check_signal('r_ahead', r_ahead)
+        y = check_signal('y', y, r_ahead.size)
+        keep = self._s.copy()
+        u = servo_run(self._p, self._ix, self._s, r_ahead, y)
         bad = np.flatnonzero(~np.isfinite(u))
         if bad.size:
+            self._s[:] = keep
             _overflow(int(bad[0]))
         return u
 
@@ -283,17 +296,18 @@ class ServoController(ct.NonlinearIOSystem):
     # --- python-control system ----------------------------------------
     def _update(self, t, x, u, params=None):
         s = np.array(x, dtype=float)
-        servo_step(self._p, self._ix, s, float(u[0]), float(u[1]))
+        servo_step(self._p, self._ix, s, *_finite_inputs(t, u))
         return s
 
     def _output(self, t, x, u, params=None):
         s = np.array(x, dtype=float)
-        return np.array([servo_step(self._p, self._ix, s, float(u[0]),
-                                    float(u[1]))])
+        return np.array([servo_step(self._p, self._ix, s,
+                                    *_finite_inputs(t, u))])
 
     def __reduce__(self):
         return (_rebuild, (self._design, self.name, self._s.copy(),
-                           self.operating_point))
+                           self.operating_point,
+                           (self.input_labels, self.output_labels)))
 
     def __repr__(self):
         m = self.margins
@@ -315,24 +329,38 @@ class ServoController(ct.NonlinearIOSystem):
 
 
 def _overflow(k):
-    """Raise for an input that overflowed the controller at sample k."""
+    """Raise for an input that overflowed the controller at sample k (the
+    caller has put its memory back)."""
     where = '' if k is None else f" at sample {k}"
     raise OverflowError(
         f"u overflowed{where}: r_ahead or y is too large for the "
         f"controller's gains (scale the data as the design's model was "
-        f"identified); call reset() before the next step")
+        f"identified); the controller's memory is unchanged")
 
 
-def _rebuild(design, name, state, operating_point):
+def _finite_inputs(t, u):
+    """(r_ahead, y) of python-control's input vector `u` at time t, as
+    floats; not finite raises, as `ServoController.step` does."""
+    r, y = float(u[0]), float(u[1])
+    if not (math.isfinite(r) and math.isfinite(y)):
+        raise ValueError(f"r_ahead and y must be finite; got r_ahead={r!r}, "
+                         f"y={y!r} at t={t!r}")
+    return r, y
+
+
+def _rebuild(design, name, state, operating_point, labels=None):
     ctrl = ServoController(design, name=name)
     ctrl.reset(y=operating_point[1], u=operating_point[0])
     ctrl._s[:] = state
+    if labels is not None:
+        ctrl.set_inputs(list(labels[0]))
+        ctrl.set_outputs(list(labels[1]))
     return ctrl
 
 
 def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
-                     max_preview=20, band_fraction=None, smoothing=None,
-                     jump_samples=None, feedback_scale=1.0,
+                     max_preview=MAX_PREVIEW, band_fraction=None,
+                     smoothing=None, jump_samples=None, feedback_scale=1.0,
                      crossover_limit=None, feedforward_from='auto',
                      feedback_from='auto',
                      adapt=None, hunting=None,
@@ -486,19 +514,10 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     source = model
     model, result = unwrap_model(model)
     band_by_default = band_fraction is None
-    mm = check_finite('modulus_margin', modulus_margin)
-    if not 0 < mm < 1:
-        raise ValueError(f"modulus_margin must be in (0, 1); got {mm!r}")
-    check_option('feedforward', feedforward, ('preview', 'zpetc', None))
-    for key, choice in (('feedforward_from', feedforward_from),
-                        ('feedback_from', feedback_from)):
-        check_option(key, choice, ('auto', 'model', 'baseline'))
-    check_option('adapt', adapt, (None, True, False))
-    if crossover_limit is not None:
-        crossover_limit = check_finite('crossover_limit', crossover_limit)
-        if not 0.1 <= crossover_limit <= 1000:
-            raise ValueError(f"crossover_limit must be in [0.1, 1000] "
-                             f"plant bandwidths; got {crossover_limit!r}")
+    mm, adapt, crossover_limit, max_preview, name, (u0, y0) = \
+        check_options(modulus_margin, feedforward, feedforward_from,
+                      feedback_from, adapt, crossover_limit, max_preview,
+                      name, operating_point)
     bands, relative, baseline = sdata.result_errors(result)
     response = sdata.measured_response(baseline, relative)
 
@@ -509,13 +528,6 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     def measured(num, den):         # a limit asked for holds a raised PID
         data = sdata.data_plant(response, bands, num, den)
         return data if crossover_limit is None or not data else data[:2] + (0,)
-    max_preview = check_int('max_preview', max_preview, 0, MAX_ORDER)
-    name = check_name('name', name)
-    if isinstance(operating_point, (str, bytes)) or \
-            np.ndim(operating_point) != 1 or np.size(operating_point) != 2:
-        raise ValueError(f"operating_point must be a pair (u0, y0); got "
-                         f"{operating_point!r}")
-    u0, y0 = (check_finite('operating_point', v) for v in operating_point)
     notes, info = [], {}
     model = sl.cancel_drift(model, notes)
     if isinstance(model, SandwichSystem):
@@ -534,6 +546,13 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
             lambda n, d: limit(n, d)[0], measured, info)
     else:
         P, linear_note, pid = model, None, None
+        for key, choice in (('feedforward_from', feedforward_from),
+                            ('feedback_from', feedback_from)):
+            if choice != 'auto':
+                raise ValueError(
+                    f"{key}={choice!r} chooses between a sandwich's own "
+                    f"linear part and its linear baseline, and a linear "
+                    f"model is only itself: leave it out")
     num, den = check_plant_tf('model' if P is model else 'the design plant',
                               P)
     dt = P.dt

@@ -1,0 +1,120 @@
+"""A ServoController that refuses an input is left as it was: a failed
+reset or step changes nothing, and the next call gives what it would have
+on an untouched controller; options are taken as they were meant (numpy's
+bools as bools, no int for a bool); the names given to its signals
+survive a pickle; a drive too coarse to integrate is refused before it
+runs."""
+
+import pickle
+
+import numpy as np
+import control as ct
+import pytest
+
+import sandwichctl as sw
+
+PLANT = sw.examples.paper_plant()
+P = ct.tf([0.5, 0.2], [1, -1.1, 0.3], 1)
+
+
+def _stepped(ctrl, n=20):
+    for k in range(n):
+        ctrl.step(np.sin(k / 3), 0.1 * k)
+    return ctrl
+
+
+@pytest.mark.parametrize('kwargs', [dict(y=5.0, u=np.nan),
+                                    dict(y=np.nan), dict(u='a'),
+                                    dict(y=True)])
+def test_a_failed_reset_changes_nothing(kwargs):
+    ctrl = _stepped(sw.servo_controller(P, operating_point=(2.0, 10.0)))
+    twin = _stepped(sw.servo_controller(P, operating_point=(2.0, 10.0)))
+    with pytest.raises((TypeError, ValueError)):
+        ctrl.reset(**kwargs)
+    assert ctrl.operating_point == (2.0, 10.0)
+    np.testing.assert_array_equal(ctrl.state, twin.state)
+    assert ctrl.step(10.0, 10.0) == twin.step(10.0, 10.0)
+
+
+def test_an_overflowing_step_or_run_leaves_the_memory_as_it_was():
+    ctrl = _stepped(sw.servo_controller(P))
+    before = ctrl.state
+    with pytest.raises(OverflowError, match='memory is unchanged'):
+        for _ in range(4):
+            ctrl.step(1e308, -1e308)
+    np.testing.assert_array_equal(ctrl.state, before)
+    with pytest.raises(OverflowError, match='sample'):
+        ctrl.run([1e308] * 4, [-1e308] * 4)
+    np.testing.assert_array_equal(ctrl.state, before)
+    assert np.isfinite(ctrl.step(0.5, 0.0))
+
+
+def test_numpy_bools_are_bools_and_ints_are_not():
+    off = sw.servo_controller(PLANT, adapt=np.False_, hunting=np.False_)
+    assert off.adapts is False and off.hunting is None
+    assert off.kp == sw.servo_controller(PLANT, adapt=False).kp
+    for value in (0, 1, 1.0):
+        with pytest.raises(ValueError, match='adapt'):
+            sw.servo_controller(PLANT, adapt=value)
+    # a deadband may be any real number, a numpy 0-d array too
+    guard = sw.servo_controller(PLANT, hunting=np.array(0.5))
+    assert guard.hunting['deadband'] == 0.5
+
+
+def test_pickling_keeps_the_names_of_the_signals():
+    ctrl = _stepped(sw.servo_controller(P, name='axis'))
+    ctrl.set_inputs(['ra', 'yy'])
+    ctrl.set_outputs(['uu'])
+    back = pickle.loads(pickle.dumps(ctrl))
+    assert back.input_labels == ['ra', 'yy'] and back.output_labels == ['uu']
+    assert back.name == 'axis'
+    np.testing.assert_array_equal(back.state, ctrl.state)
+    assert back.step(0.3, 1.0) == ctrl.step(0.3, 1.0)
+
+
+def test_an_overflowing_controller_never_drives_the_plant():
+    applied = []
+
+    class Plant:
+        dt = 1
+
+        def step(self, u):
+            applied.append(u)
+            return 0.0
+
+    with pytest.raises(OverflowError, match='not applied to the plant'):
+        sw.closed_loop_response(Plant(), np.full(50, 1e308),
+                                sw.servo_controller(P))
+    assert all(np.isfinite(applied))
+
+
+def test_a_plant_dt_of_any_numeric_kind_is_compared():
+    class Plant:
+        def __init__(self, dt):
+            self.dt = dt
+
+        def step(self, u):
+            return 0.0
+
+    ctrl = sw.servo_controller(P)
+    r = np.zeros(5)
+    for dt in (np.array(1.0), np.float32(1.0), 1, None, True):
+        out = sw.closed_loop_response(Plant(dt), r, ctrl)
+        assert out.outputs.shape == (2, 5)
+    for dt in (np.array(2.0), [2.0], 0, np.nan):
+        with pytest.raises((TypeError, ValueError), match='dt'):
+            sw.closed_loop_response(Plant(dt), r, ctrl)
+
+
+def test_every_random_drive_passes_the_substep_check_and_a_coarse_one_not():
+    # the check is far from the family: it never refuses a random drive
+    for seed in range(200):
+        d = sw.data.random_drive(seed)
+        sw.data.ServoDrive(d['loop'], d['play'], d['dt'], seed=0, n=10,
+                           **d['params'])
+    # a sub-step too coarse for the contact diverged to 1e127, then NaN
+    with pytest.raises(ValueError, match='substeps=1 is too few'):
+        sw.data.ServoDrive(k=5e10, substeps=1)
+    fine = sw.data.ServoDrive(k=5e10, substeps=400, n=300, seed=0)
+    y = [fine.step(1e-3) for _ in range(299)]
+    assert np.all(np.isfinite(y)) and np.max(np.abs(y)) < 1e-2
