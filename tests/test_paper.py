@@ -67,11 +67,25 @@ def test_headings_of_the_noisy_blocks():
         section5.snr_label(46.5, 'power')
 
 
-def test_demo_prints_the_three_noisy_blocks(tmp_path, capsys):
+def test_demo_runs_the_servo_loop_then_the_three_noisy_blocks(tmp_path,
+                                                               capsys):
     from sandwichctl.__main__ import main
     assert main(['demo', '--out', str(tmp_path), '--samples', '1500']) == 0
     out = capsys.readouterr().out
-    blocks = out.split('\n== ')[1:]
+    # the main job first: both designs on the drive, and the play-free limit
+    servo, paper = out.split('Reproducing Section 5')
+    assert servo.startswith('== servo loop on a simulated ball-screw axis')
+    rms = {}
+    for name in ('linear', 'sandwich', 'linear, no play'):
+        row = re.search(rf"^{re.escape(name)} +([0-9.]+) +[0-9]+ +[0-9.]+ "
+                        rf"+(\d+) +([0-9.]+)%$", servo, re.M)
+        rms[name] = float(row.group(1))
+        assert row.group(2) == '0' and float(row.group(3)) <= 1.0
+    assert rms['sandwich'] < rms['linear']
+    ratio = float(re.search(r"sandwich RMS / linear RMS: ([0-9.]+)",
+                            servo).group(1))
+    assert ratio == pytest.approx(rms['sandwich'] / rms['linear'], abs=0.01)
+    blocks = paper.split('\n== ')[1:]
     assert [b.split(' ==')[0] for b in blocks] == [
         'noise-free', 'noisy, SNR 46.5 (variance ratio)',
         'noisy, SNR 46.5 (amplitude ratio)', 'noisy, SNR 46.5 dB']
@@ -80,8 +94,16 @@ def test_demo_prints_the_three_noisy_blocks(tmp_path, capsys):
         for label in section5.METHODS:
             assert label in block.splitlines()[1]
     assert sorted(p.name for p in tmp_path.iterdir()) == [
-        'fig2_noise_free.png', 'fig3_noisy_amplitude.png',
-        'fig3_noisy_db.png', 'fig3_noisy_variance.png']
+        'axis.c', 'axis.h', 'fig2_noise_free.png', 'fig3_noisy_amplitude.png',
+        'fig3_noisy_db.png', 'fig3_noisy_variance.png', 'servo_loop.png']
+
+
+def test_demo_without_the_servo_loop(tmp_path, capsys):
+    from sandwichctl.__main__ import main
+    assert main(['demo', '--out', str(tmp_path), '--samples', '300',
+                 '--no-servo']) == 0
+    assert 'servo loop' not in capsys.readouterr().out
+    assert not (tmp_path / 'servo_loop.png').exists()
 
 
 @pytest.fixture(scope='module')
