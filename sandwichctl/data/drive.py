@@ -125,6 +125,8 @@ _LOOPS = ('position', 'speed')
 def _rng(name, seed):
     """numpy's generator of `seed`, refused with a message naming it."""
     try:
+        if isinstance(seed, (bool, np.bool_)):
+            raise TypeError("a bool is no seed")
         return np.random.default_rng(seed)
     except (TypeError, ValueError) as exc:
         kind = TypeError if isinstance(exc, TypeError) else ValueError
@@ -357,9 +359,6 @@ def _setup(loop, play, dt, seed, n, params):
     dt = _check_sample_time(dt)
     p = _params(params)
     _check_substep(p, dt)
-    if isinstance(seed, (bool, np.bool_)):
-        raise TypeError(f"seed must be None, an integer >= 0 or a "
-                        f"numpy.random.Generator; got bool {seed!r}")
     rng = _rng('seed', seed)
     disturbance = p['torque_noise'] * rng.standard_normal(n)
     offset = rng.uniform(0, p['resolution'])
@@ -680,7 +679,7 @@ class DriveCase:
 
 
 def drive_case(seed, loop='position', play=200e-6, n=5000, n_val=None,
-               **params):
+               dt=DRIVE_DT, **params):
     """Estimation and validation data of the servo drive.
 
     Parameters
@@ -695,6 +694,8 @@ def drive_case(seed, loop='position', play=200e-6, n=5000, n_val=None,
         Length of the estimation record (default 5000, i.e. 5 s).
     n_val : int, optional
         Length of the validation record (default n).
+    dt : float, optional
+        Sample time in seconds (default 1 ms; a `random_drive`'s ``dt``).
     **params
         Overrides of `DRIVE_PARAMETERS`.
 
@@ -716,10 +717,11 @@ def drive_case(seed, loop='position', play=200e-6, n=5000, n_val=None,
     r_est, r_val, d_est, d_val = (
         np.random.default_rng(s)
         for s in np.random.SeedSequence([seed, 0xd21e]).spawn(4))
-    u = drive_reference(n, loop, r_est)
-    u_val = drive_reference(n_val, loop, r_val)
-    y = servo_drive(u, loop, play, seed=d_est, **params)
-    y_val = servo_drive(u_val, loop, play, seed=d_val, **params)
-    return DriveCase(u=u, y=y, u_val=u_val, y_val=y_val, dt=DRIVE_DT,
+    dt = _check_sample_time(dt)
+    u = drive_reference(n, loop, r_est, dt)
+    u_val = drive_reference(n_val, loop, r_val, dt)
+    y = servo_drive(u, loop, play, dt, seed=d_est, **params)
+    y_val = servo_drive(u_val, loop, play, dt, seed=d_val, **params)
+    return DriveCase(u=u, y=y, u_val=u_val, y_val=y_val, dt=dt,
                      loop=loop, play=float(play), seed=seed,
                      params=_params(params))

@@ -57,6 +57,9 @@ from scipy.signal import lfilter
 from ..model.sandwich import SandwichSystem
 from .._checks import check_int, check_positive
 
+#: longest signal or record drawn (800 MB of float64; as `drive`'s)
+MOST_SAMPLES = 10 ** 8
+
 __all__ = ['excitation', 'random_case', 'random_family', 'family_specs',
            'SyntheticCase', 'KINDS', 'SNRS', 'N_RANGE', 'N_BUCKETS']
 
@@ -140,7 +143,8 @@ def _square_sine(n, rng):
     else:                                        # staircase
         levels = rng.uniform(-1, 1, segment[-1] + 1)
     square = levels[segment]
-    amp = rng.uniform(0.2, 1.0) * np.std(square)
+    # a record shorter than a hold has one level: the sine alone moves it
+    amp = rng.uniform(0.2, 1.0) * (np.std(square) or 1.0)
     f = rng.uniform(0.002, 0.05)
     sine = amp * np.sin(2 * np.pi * f * np.arange(n)
                         + rng.uniform(0, 2 * np.pi))
@@ -186,9 +190,9 @@ def excitation(kind, n, rng=None):
     >>> bool(abs(u.mean()) < 1e-12), bool(abs(rms - 1) < 1e-12)
     (True, True)
     """
-    if kind not in _GENERATORS:
+    if not (isinstance(kind, str) and kind in _GENERATORS):
         raise ValueError(f"kind must be one of {list(KINDS)}; got {kind!r}")
-    n = check_int('n', n, minimum=2)
+    n = check_int('n', n, minimum=2, maximum=MOST_SAMPLES)
     rng = _as_rng('rng', rng)
     for _ in range(100):
         s = _GENERATORS[kind](n, rng)
@@ -361,8 +365,8 @@ def _check_n_range(n_range):
     except (TypeError, ValueError):
         raise TypeError(f"n_range must be a pair (n_min, n_max); got "
                         f"{n_range!r}") from None
-    lo = check_int('n_range[0]', lo, minimum=100)
-    hi = check_int('n_range[1]', hi, minimum=lo)
+    lo = check_int('n_range[0]', lo, minimum=100, maximum=MOST_SAMPLES)
+    hi = check_int('n_range[1]', hi, minimum=lo, maximum=MOST_SAMPLES)
     return lo, hi
 
 
@@ -415,8 +419,9 @@ def random_case(seed, *, snr=None, n=None, input_kind=None,
     seed = check_int('seed', seed)
     snr = _check_snr(snr)
     if n is not None:
-        n = check_int('n', n, minimum=100)
-    if input_kind is not None and input_kind not in KINDS:
+        n = check_int('n', n, minimum=100, maximum=MOST_SAMPLES)
+    if input_kind is not None and not (isinstance(input_kind, str)
+                                       and input_kind in KINDS):
         raise ValueError(f"input_kind must be one of {list(KINDS)} or "
                          f"None; got {input_kind!r}")
     integrating = _check_integrating(integrating)

@@ -48,6 +48,13 @@ def step13_held_out(task, prob, best, linear, origin):
     tails = np.concatenate([np.arange(c, part.size) + at for part, c, at
                             in zip(prob.u, cut, starts)])
     y_tail = np.concatenate(prob.y)[tails]
+    if not _scorable(heads(prob.u) + heads(prob.y), y_tail):
+        best['held_out'] = {'samples': n_tail, 'note': (
+            "the open backlash was not cross-checked: the leading "
+            f"{1 - HELD_OUT:.0%} of an experiment has a constant input or "
+            "output, or the held-out tails a constant output, so nothing "
+            "fitted there could be scored")}
+        return prob, best, linear
     st = prob.st
     head = lm(st, best['phi'], heads(prob.u), heads(prob.y), HELD_OUT_ITER,
               task.opt.tol)
@@ -83,6 +90,13 @@ def step13_held_out(task, prob, best, linear, origin):
     out['n_starts'] = best['n_starts']
     return origin.probs[origin.sign], out, dict(
         linear, **{k: v for k, v in origin.baseline().items() if k == 'held'})
+
+
+def _scorable(heads, y_tail):
+    """Whether models can be fitted on the `heads` (every signal varies
+    over two samples or more) and scored on the tails' output `y_tail`."""
+    return (all(part.size >= 2 and np.ptp(part) > 0 for part in heads)
+            and np.ptp(y_tail) > 0)
 
 
 def _fit(r, y):

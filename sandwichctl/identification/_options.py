@@ -35,10 +35,10 @@ MINIMUM_PHASE = ('L1',)
 
 def check_minimum_phase(value):
     """``minimum_phase`` checked: None (also for False) or 'L1'."""
-    if value is None or value is False:
+    if value is None or (isinstance(value, (bool, np.bool_)) and not value):
         return None
     if isinstance(value, str) and value in MINIMUM_PHASE:
-        return value
+        return str(value)
     raise ValueError(f"minimum_phase must be None, False or one of "
                      f"{list(MINIMUM_PHASE)} (the block whose zeros are "
                      f"kept inside the unit circle); got {value!r}")
@@ -136,6 +136,12 @@ class OEOptions(_Options):
                     and not isinstance(k, bool) and k >= 0)):
             raise ValueError(f"integrators must be an integer >= 0 or "
                              f"'auto'; got {k!r}")
+        self._set('integrators', k if isinstance(k, str) else int(k))
+        if k == 0 and self.integrator_block in ('L1', 'L2'):
+            raise ValueError(f"integrator_block={self.integrator_block!r} "
+                             f"says where the integrator goes, and "
+                             f"integrators=0 asks for none: leave "
+                             f"integrator_block out")
         if not (isinstance(self.integrator_block, str)
                 and self.integrator_block in INTEGRATOR_BLOCKS):
             raise ValueError(f"integrator_block must be one of "
@@ -146,7 +152,8 @@ class OEOptions(_Options):
         self._set('minimum_phase', check_minimum_phase(self.minimum_phase))
         widths = self.widths
         if np.ndim(widths) != 1 or not all(
-                isinstance(w, numbers.Real) and 0 < w < 10 for w in widths):
+                isinstance(w, numbers.Real) and not isinstance(
+                    w, (bool, np.bool_)) and 0 < w < 10 for w in widths):
             raise ValueError(f"widths must be a sequence of relative widths "
                              f"in (0, 10); got {widths!r}")
         self._set('widths', tuple(float(w) for w in widths))
@@ -155,6 +162,9 @@ class OEOptions(_Options):
         self._set('smooth', check_bool('smooth', self.smooth))
         self._set('tol', check_tolerance('tol', self.tol))
         self._set('min_fit', check_finite('min_fit', self.min_fit))
+        if not self.min_fit < 100:
+            raise ValueError(f"min_fit must be below 100 (a fit in percent "
+                             f"is at most 100); got {self.min_fit!r}")
 
     def search(self):
         """The search's options as a dict (``res.options``)."""
@@ -216,8 +226,9 @@ class BundleOptions(_RecursiveCommon):
         self._set('delta', check_positive('delta', self.delta))
         self._check_steps(eta0)
         self._set('n_ls', check_int('n_ls', self.n_ls, minimum=0))
-        self._set('step_bound', bool(self.step_bound))
-        self._set('full_step_test', bool(self.full_step_test))
+        self._set('step_bound', check_bool('step_bound', self.step_bound))
+        self._set('full_step_test',
+                  check_bool('full_step_test', self.full_step_test))
 
     def _check_steps(self, eta0):
         """q, q_star, gamma, eta_max and rho of the line search."""
@@ -272,7 +283,8 @@ class GradientOptions(_RecursiveCommon):
                              f"{NONSMOOTH_READINGS}; got {reading!r}")
         old = self.skip_nonsmooth
         if old is not None:
-            implied = 'skip' if bool(old) else 'subgradient'
+            implied = ('skip' if check_bool('skip_nonsmooth', old)
+                       else 'subgradient')
             if self.nonsmooth is not None and reading != implied:
                 raise ValueError(
                     f"skip_nonsmooth={old} means nonsmooth={implied!r}, but "

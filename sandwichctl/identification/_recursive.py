@@ -12,6 +12,8 @@ points and their distances s_j, and stores the new estimate's internal
 signals, in one compiled call that leaves compiled code only for piqp.
 """
 
+import contextlib
+
 import numba
 import numpy as np
 
@@ -225,9 +227,38 @@ def _solve_direction(P, c, lam, sample):
     return True
 
 
+#: the bundle QP failures of the run under way, (sample, reason): told in
+#: one warning at its end (`one_qp_warning`), not one a sample (2,400 of
+#: them on data in other units)
+QP_FAILURES = []
+_QP_RUNS = []           # the `one_qp_warning` blocks open, innermost last
+
+
 def _direction_failed(sample, reason):
-    warn(f"bundle QP failed at sample {sample} ({reason}); using the "
-         f"current subgradient only", IdentificationWarning)
+    if _QP_RUNS:
+        QP_FAILURES.append((sample, str(reason)))
+    else:
+        warn(f"bundle QP failed at sample {sample} ({reason}); using the "
+             f"current subgradient only", IdentificationWarning)
+
+
+@contextlib.contextmanager
+def one_qp_warning():
+    """The bundle QP failures within the block (and blocks nested in it)
+    told in one IdentificationWarning when the outermost block ends."""
+    if not _QP_RUNS:
+        del QP_FAILURES[:]
+    _QP_RUNS.append(True)
+    try:
+        yield
+    finally:
+        _QP_RUNS.pop()
+        if not _QP_RUNS and QP_FAILURES:
+            (sample, reason), n = QP_FAILURES[0], len(QP_FAILURES)
+            del QP_FAILURES[:]
+            warn(f"bundle QP failed at {n} sample(s), first at sample "
+                 f"{sample} ({reason}); the current subgradient alone was "
+                 f"used there", IdentificationWarning)
 
 
 @numba.njit(cache=True)

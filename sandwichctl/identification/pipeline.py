@@ -63,6 +63,7 @@ from ._long import is_long, long_search
 from ._options import OEOptions, RECURSIVE, method_options
 from ._predictor import padding, stable_and_finite
 from ._problem import Problem
+from ._recursive import one_qp_warning
 from ._search import Task, linear_baseline, search
 from .batch import refine as _refine, _progress_range
 from .recursive import RecursiveIdentifier
@@ -91,7 +92,10 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     ----------
     u, y : array_like, shape (N,)
         Measured input and output (the system starts at rest), in any
-        units: the result does not depend on them. Instead of two arrays,
+        units: with ``method='oe'`` the result does not depend on them
+        (the recursive methods, the paper's, run on the data as given, and
+        their step sizes ``eta0`` and ``mu`` are in its units). Instead of
+        two arrays,
         `u` may be a ``control.TimeResponseData`` (its time vector gives
         dt) or a list of experiments (pairs or records), each from its own
         initial state, with the cost summed; then give the orders by
@@ -348,10 +352,11 @@ def _identify_recursive(u, y, orders, method, kw):
     step = max(u.size // 20, 1)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter('always')
-        for lo in _progress_range(u.size, kw['progress'], method, step):
-            est.update_many(u[lo:lo + step], y[lo:lo + step])
-            if est.diverged_at is not None:
-                break
+        with one_qp_warning():
+            for lo in _progress_range(u.size, kw['progress'], method, step):
+                est.update_many(u[lo:lo + step], y[lo:lo + step])
+                if est.diverged_at is not None:
+                    break
     for w in caught:
         warn(str(w.message), w.category if issubclass(
             w.category, SandwichWarning) else IdentificationWarning)
@@ -360,9 +365,9 @@ def _identify_recursive(u, y, orders, method, kw):
     if kw['refine']:
         judge(result, verdict(**facts))     # the recursive pass, kept
         refine = kw['refine']
-        kwargs = refine if isinstance(refine, dict) else {}
-        refined = _refine(result.model, u, y, progress=kw['progress'],
-                          **kwargs)
+        kwargs = dict(progress=kw['progress'])
+        kwargs.update(refine if isinstance(refine, dict) else {})
+        refined = _refine(result.model, u, y, **kwargs)
         refined.recursive = result
         refined.history = result.history
         refined.method = f"{method}+refine"

@@ -30,14 +30,14 @@ import dataclasses
 import numpy as np
 
 from ._predictor import padding
-from ._recursive import (bundle_run, gradient_run,
+from ._recursive import (one_qp_warning, bundle_run, gradient_run,
                          rpem_run, LONG, SHORT, NULL, STOP, SKIP,
                          SUBGRADIENT, RPEM_OK, RPEM_LIMITED, RPEM_REJECTED,
                          RPEM_RESET)
 from ._options import OPTIONS, RECURSIVE, method_options
 from .result import IdentificationResult
 from ..model.sandwich import SandwichSystem, theta_labels
-from .._checks import (warn, IdentificationWarning, check_order,
+from .._checks import (warn, IdentificationWarning, check_dt, check_order,
                        check_signal, check_vector, check_finite)
 
 __all__ = ['RecursiveIdentifier']
@@ -146,7 +146,7 @@ class RecursiveIdentifier:
                         ('na', 'nb', 'nc', 'nd', 'q1', 'q2'))
         self.method = method
         self.options = _check_options(method, options)
-        self.dt = dt
+        self.dt = check_dt('dt', dt)
         self.labels = theta_labels(na, nb, nc, nd)
         p = len(self.labels)
         if theta0 is None:
@@ -232,22 +232,24 @@ class RecursiveIdentifier:
                 f"a new estimator (smaller eta0/mu, or another theta0)")
         errors = np.empty(u.size)
         done = 0
-        while done < u.size:
-            room = self._u.size - self._pos
-            if room == 0:
-                self._shift()
+        with one_qp_warning():
+            while done < u.size:
                 room = self._u.size - self._pos
-            m = min(room, u.size - done)
-            sl = slice(self._pos, self._pos + m)
-            self._u[sl] = u[done:done + m]
-            self._y[sl] = y[done:done + m]
-            got = self._run(self._pos, self._pos + m, errors[done:done + m])
-            self._pos += got
-            self.n_samples += got
-            done += got
-            if got < m:
-                errors[done:] = np.nan
-                break
+                if room == 0:
+                    self._shift()
+                    room = self._u.size - self._pos
+                m = min(room, u.size - done)
+                sl = slice(self._pos, self._pos + m)
+                self._u[sl] = u[done:done + m]
+                self._y[sl] = y[done:done + m]
+                got = self._run(self._pos, self._pos + m,
+                                errors[done:done + m])
+                self._pos += got
+                self.n_samples += got
+                done += got
+                if got < m:
+                    errors[done:] = np.nan
+                    break
         return errors
 
     def _shift(self):
@@ -347,8 +349,10 @@ class RecursiveIdentifier:
         """The `IdentificationResult` for the samples processed so far."""
         p = self._theta.size
         hist = (np.array(self._hist) if self._hist else np.zeros((0, p)))
-        success = self.diverged_at is None
-        if success:
+        success = self.diverged_at is None and self.n_samples > 0
+        if self.n_samples == 0:
+            message = "no samples processed yet: the model is theta0"
+        elif success:
             message = f"processed {self.n_samples} samples"
         else:
             message = (f"diverged at sample "

@@ -14,7 +14,7 @@ import numpy as np
 from scipy import stats
 from scipy.optimize import OptimizeResult
 
-from .._checks import (check_reference, warn, ExcitationWarning,
+from .._checks import (check_reference, check_vector, warn, ExcitationWarning,
                        IdentificationWarning)
 from ..model._coefficients import signed_theta
 
@@ -25,6 +25,10 @@ __all__ = ['IdentificationResult', 'parameter_error']
 CROSSING_NOTE = 0.1
 #: A fit must be at least this many percent to count as explaining the data.
 MIN_FIT = 5.0
+#: Costs (on the scaled data: about half the samples' count for a model
+#: that explains nothing) closer than this are equal: a model that fits
+#: exactly is not worse than a linear one that does too.
+EQUAL_COST = 1e-16
 #: A parameter is poorly determined when its standard error exceeds this
 #: share of its size (at least 1e-3).
 POORLY_DETERMINED = 0.5
@@ -110,7 +114,7 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
         fail('fit', f"the model does not explain the data (fit {fit:.3g} % "
                     f"<= {min_fit:g} %)")
     if linear is not None and \
-            cost_scaled > linear['cost_scaled'] * (1 + 1e-9) + 1e-300:
+            cost_scaled > linear['cost_scaled'] * (1 + 1e-9) + EQUAL_COST:
         fail('linear', f"the fit is worse than the linear baseline "
                        f"({fit:.3g} % < {linear['fit']:.3g} %)" + (
                            "" if method == 'oe' else
@@ -131,6 +135,17 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
                               f"circle (another delay q1, or "
                               f"minimum_phase=None, may suit them)", False)
     return failed
+
+
+def _held_out_lines(held):
+    """The lines of `IdentificationResult`'s repr on step 13's check."""
+    if held and 'fit' in held:
+        return [f"  held-out tails ({held['samples']} samples): sandwich "
+                f"{held['fit']:.2f} %, linear {held['linear_fit']:.2f} % "
+                f"(fitted without them)" + (
+                    "" if held['open'] else
+                    ": the open backlash did not generalise")]
+    return [f"  {held['note']}"] if held else []
 
 
 def _held(linear):
@@ -194,7 +209,14 @@ def parameter_error(theta_hat, theta_true):
     0.0447...
     """
     theta_true = check_reference('theta_true', theta_true)
-    theta_hat = np.asarray(theta_hat, dtype=float)
+    try:
+        theta_hat = np.asarray(theta_hat, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"theta_hat must be an array of numbers, shape (p,) "
+                        f"or (N, p); got {theta_hat!r:.60}") from None
+    if theta_hat.ndim not in (1, 2):
+        raise ValueError(f"theta_hat must have shape (p,) or (N, p); got "
+                         f"shape {theta_hat.shape}")
     if theta_hat.shape[-1] != theta_true.size:
         raise ValueError(
             f"theta_hat has {theta_hat.shape[-1]} parameters per estimate "
@@ -340,9 +362,11 @@ class IdentificationResult(OptimizeResult):
             self['theta'] = signed_theta(theta, model.gain_sign)
 
     def __repr__(self):
-        lines = [f"IdentificationResult ({self.method}): "
-                 f"{'success' if self.success else 'FAILED'}",
-                 f"  {self.message}"]
+        if 'theta' not in self:
+            return f"IdentificationResult({dict.__repr__(self)})"
+        lines = [f"IdentificationResult ({self.get('method')}): "
+                 f"{'success' if self.get('success') else 'FAILED'}",
+                 f"  {self.get('message')}"]
         if getattr(self, 'counts', None):
             lines.append('  steps: ' + ', '.join(
                 f"{k} {v}" for k, v in self.counts.items() if v))
@@ -353,15 +377,7 @@ class IdentificationResult(OptimizeResult):
                 text += (f"; linear output-error baseline (same total "
                          f"orders): {lin['fit']:.2f} %")
             lines.append(text)
-        held = getattr(self, 'held_out', None)
-        if held and 'fit' in held:
-            lines.append(f"  held-out tails ({held['samples']} samples): "
-                         f"sandwich {held['fit']:.2f} %, linear "
-                         f"{held['linear_fit']:.2f} % (fitted without them)"
-                         + ("" if held['open'] else
-                            ": the open backlash did not generalise"))
-        elif held:
-            lines.append(f"  {held['note']}")
+        lines += _held_out_lines(getattr(self, 'held_out', None))
         sig = getattr(self, 'significance', None)
         if sig:
             lines.append(f"  backlash significance: F = {sig['F']:.4g} on "
@@ -403,8 +419,23 @@ class IdentificationResult(OptimizeResult):
     __str__ = __repr__
 
     def parameter_error(self, true_theta):
-        """Normalised error ||theta(k) - theta|| / ||theta|| for every k."""
-        return parameter_error(self.history, true_theta)
+        """Normalised error ||theta(k) - theta|| / ||theta|| for every k
+        of the recursive estimate's history (`parameter_error` of
+        ``res.theta`` for the final estimate)."""
+        return parameter_error(self._history(), true_theta)
+
+    def _history(self):
+        """The history theta(k), refused when empty: only the recursive
+        methods keep one (followed by `refine`, it ends at the recursive
+        estimate)."""
+        history = getattr(self, 'history', None)
+        if history is None or np.size(history) == 0:
+            raise ValueError(
+                f"this result ({self.get('method')!r}) has no history of "
+                f"estimates: only the recursive methods ('bundle', "
+                f"'gradient', 'rpem') keep one; for the final estimate use "
+                f"sw.parameter_error(res.theta, theta_true)")
+        return history
 
     def plot_convergence(self, true_theta=None, axes=None, label=None,
                          **line_kw):
@@ -427,7 +458,22 @@ class IdentificationResult(OptimizeResult):
         ndarray of matplotlib Axes
         """
         import matplotlib.pyplot as plt
+        history = self._history()
         p = len(self.theta_labels)
+        if true_theta is not None:
+            true_theta = check_vector('true_theta', true_theta)
+            if true_theta.size != p:
+                raise ValueError(f"true_theta must have the {p} parameters "
+                                 f"{list(self.theta_labels)}; got "
+                                 f"{true_theta.size}")
+        if axes is not None:
+            axes = np.asarray(axes, dtype=object)
+            if axes.size < p or not all(hasattr(ax, 'plot')
+                                        for ax in axes.flat):
+                raise ValueError(f"axes must hold {p} matplotlib Axes, one "
+                                 f"per parameter (as an earlier call "
+                                 f"returns them); got {axes.size} "
+                                 f"item{'s' if axes.size != 1 else ''}")
         if axes is None:
             ncol = 3
             nrow = -(-p // ncol)
@@ -436,13 +482,12 @@ class IdentificationResult(OptimizeResult):
             for ax in axes.flat[p:]:
                 ax.set_visible(False)
         axes = np.asarray(axes)
-        k = np.arange(1, self.history.shape[0] + 1)
+        k = np.arange(1, history.shape[0] + 1)
         for i, ax in enumerate(axes.flat[:p]):
-            ax.plot(k, self.history[:, i], label=label or self.method,
+            ax.plot(k, history[:, i], label=label or self.method,
                     **line_kw)
             if true_theta is not None:
-                ax.axhline(np.asarray(true_theta)[i], color='k', ls='--',
-                           lw=0.8)
+                ax.axhline(true_theta[i], color='k', ls='--', lw=0.8)
             ax.set_title(self.theta_labels[i], fontsize=9)
         axes.flat[0].legend(fontsize=8)
         for ax in axes[-1] if axes.ndim == 2 else axes[-1:]:

@@ -38,7 +38,8 @@ from .pipeline import identify, _method_options
 from ..tools.experiments import _check_dt, as_experiments
 from ..tools.residuals import _simulate
 from ..tools.validation import fit_percent
-from .._checks import check_bool, progress_bar
+from .._checks import (MAX_ORDER, IdentificationWarning, check_bool,
+                       check_option, progress_bar)
 
 __all__ = ['select_structure', 'StructureTable']
 
@@ -262,7 +263,11 @@ def _grid(value, keys, default, argname):
         axes = []
         for k in keys:
             v = value[k]
-            v = [v] if isinstance(v, numbers.Integral) else list(v)
+            try:
+                v = [v] if isinstance(v, numbers.Integral) else list(v)
+            except TypeError:
+                raise TypeError(f"{argname}[{k!r}] must be an integer or a "
+                                f"list of integers; got {v!r}") from None
             if not v:
                 raise ValueError(f"{argname}[{k!r}] is empty; give at least "
                                  f"one value")
@@ -284,9 +289,10 @@ def _grid(value, keys, default, argname):
                              f"{item!r}")
         for k, v in zip(keys, item):
             if isinstance(v, bool) or not isinstance(v, numbers.Integral) \
-                    or v < 0:
-                raise ValueError(f"{argname}: {k} must be an integer >= 0; "
-                                 f"got {v!r} in {tuple(item)!r}")
+                    or not 0 <= v <= MAX_ORDER:
+                raise ValueError(f"{argname}: {k} must be an integer from 0 "
+                                 f"to {MAX_ORDER}; got {v!r} in "
+                                 f"{tuple(item)!r}")
         out.append(tuple(int(v) for v in item))
     return list(dict.fromkeys(out))          # drop repeats, keep the order
 
@@ -375,7 +381,7 @@ def select_structure(data, orders=None, delays=None, validation=None,
 
     Warns
     -----
-    RuntimeWarning
+    IdentificationWarning
         If no candidate was identified successfully. The warnings of the
         identifications themselves are not repeated: each row keeps its
         own (``rows[i]['warnings']``) and the table notes which rows have
@@ -451,12 +457,8 @@ def select_structure(data, orders=None, delays=None, validation=None,
 def _check_arguments(criterion, include_linear, progress, identify_options):
     """select_structure's own arguments, and the identify options that
     its grids or its own arguments decide."""
-    if criterion not in _CRITERIA:
-        raise ValueError(f"criterion must be one of {list(_CRITERIA)}; got "
-                         f"{criterion!r}")
-    if not isinstance(include_linear, bool):
-        raise TypeError(f"include_linear must be True or False; got "
-                        f"{include_linear!r}")
+    check_option('criterion', criterion, tuple(_CRITERIA))
+    check_bool('include_linear', include_linear)
     check_bool('progress', progress)
     fixed = set(identify_options) & set(_ORDER_KEYS + _DELAY_KEYS
                                         + ('progress',))
@@ -467,7 +469,7 @@ def _check_arguments(criterion, include_linear, progress, identify_options):
                         f"select_structure's own")
     check_minimum_phase(identify_options.get('minimum_phase'))
     offsets = identify_options.get('offsets', 'mean')
-    if offsets != 'mean':
+    if not (isinstance(offsets, str) and offsets == 'mean'):
         raise ValueError(
             f"select_structure removes the means of u and y of every "
             f"experiment (offsets='mean') and scores every model by its "
@@ -490,7 +492,9 @@ def _read(data, validation, dt):
     centred data (so offsets='none' for them), and the scores are
     computed on the same centred copies."""
     est = as_experiments(data)
-    if dt is not None:
+    _varied('data', est)
+    if dt is not None and dt is not True:      # True: not given
+
         if est.dt is True:
             est = type(est)(est, _check_dt(dt))
         elif abs(est.dt - _check_dt(dt)) > 1e-9 * est.dt:
@@ -502,8 +506,22 @@ def _read(data, validation, dt):
             val = as_experiments(validation)
         except (TypeError, ValueError) as err:
             raise type(err)(f"validation: {err}") from None
+        _varied('validation', val)
         val = _centred(type(val)(val, _same_dt(val.dt, est.dt)))
     return _centred(est), val
+
+
+def _varied(argname, exps):
+    """ValueError unless the input and the output of every experiment
+    vary over at least two samples: nothing is identified from, or scored
+    on, a constant signal."""
+    for i, (u, y) in enumerate(exps):
+        for what, x in (('input', u), ('output', y)):
+            if not (x.size >= 2 and np.ptp(x) > 0):
+                raise ValueError(
+                    f"{argname}: the {what} of experiment {i} is constant "
+                    f"({x.size} sample{'s' if x.size != 1 else ''}); every "
+                    f"model would fail on it")
 
 
 def _identify_row(s, est, options, bar):
@@ -543,7 +561,7 @@ def _rank(rows, key, sign):
         warnings.warn(
             "select_structure: no candidate was identified successfully; "
             "the table ranks them anyway (see rows[i]['message'] before "
-            "using best_model)", RuntimeWarning, stacklevel=3)
+            "using best_model)", IdentificationWarning, stacklevel=3)
 
 
 def _same_dt(dt, wanted):

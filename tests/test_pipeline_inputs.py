@@ -1,0 +1,111 @@
+"""Edge cases of the identification side met by a review of bad inputs:
+data the held-out check cannot score, a model that fits exactly, a
+bundle method whose QP fails at every sample, result methods asked for a
+history an output-error result has not, and data helpers at their
+documented limits."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import sandwichctl as sw
+
+PLANT = sw.examples.paper_plant()
+O = PLANT.orders
+U = sw.examples.paper_input(2400, seed=1)
+Y = PLANT.simulate(U).outputs
+
+
+def test_an_input_at_rest_for_most_of_the_record_skips_the_held_out_check():
+    # the held-out refit on the leading 75 % saw a zero input: LinAlgError
+    u = np.r_[np.zeros(2390), np.ones(10)]
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', sw.ExcitationWarning)
+        res = sw.identify(u, PLANT.simulate(u).outputs, **O)
+    assert 'not cross-checked' in res.held_out['note']
+    assert np.isfinite(res.fit)
+
+
+def test_a_tiny_experiment_skips_the_held_out_check_without_numpy_noise():
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')           # numpy's too
+        res = sw.identify([(U, Y), (U[:1], Y[:1] + 5)], **O,
+                          offsets='estimate')
+    assert 'not cross-checked' in res.held_out['note']
+    assert res.success
+
+
+@pytest.mark.parametrize('u, y, orders', [
+    (U, U, dict(O, q1=0, q2=0)),                   # y = u: exact
+    (np.r_[np.zeros(1000), np.ones(1000)], None, O)])   # one step
+def test_a_model_that_fits_exactly_is_not_worse_than_linear(u, y, orders):
+    y = PLANT.simulate(u).outputs if y is None else y
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', sw.ExcitationWarning)
+        res = sw.identify(u, y, **orders)
+    assert res.fit > 99.999999 and res.linear['fit'] > 99.999999
+    assert res.success, res.message
+
+
+def test_bundle_qp_failures_are_told_once():
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter('always')
+        res = sw.identify(U[:1200], 1e3 * Y[:1200], **O, method='bundle')
+    told = [w for w in caught if 'bundle QP failed' in str(w.message)]
+    assert len(told) == 1 and not res.success
+    assert int(str(told[0].message).split(' at ')[1].split()[0]) > 100
+
+
+def test_history_methods_refuse_a_result_without_history():
+    res = sw.identify(U[:600], Y[:600], **O)
+    for call in (lambda: res.parameter_error(PLANT.theta),
+                 res.plot_convergence):
+        with pytest.raises(ValueError, match='no history'):
+            call()
+    assert sw.parameter_error(res.theta, PLANT.theta) < 1e-3
+
+
+def test_plot_convergence_checks_its_arguments():
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    res = sw.identify(U[:300], Y[:300], **O, method='gradient')
+    with pytest.raises(ValueError, match='9 parameters'):
+        res.plot_convergence(true_theta=[1, 2])
+    for axes in (5, plt.subplots()[1], plt.subplots(1, 2)[1]):
+        with pytest.raises(ValueError, match='9 matplotlib Axes'):
+            res.plot_convergence(axes=axes)
+    axes = res.plot_convergence(true_theta=PLANT.theta)
+    assert res.plot_convergence(axes=axes) is not None
+    plt.close('all')
+
+
+def test_a_recursive_estimator_without_data_is_no_success():
+    res = sw.RecursiveIdentifier(**O).result()
+    assert not res.success and 'no samples' in res.message
+
+
+@pytest.mark.parametrize('n', [2, 3, 4, 5])
+def test_square_and_sine_is_drawn_at_its_shortest(n):
+    for seed in range(20):
+        s = sw.data.excitation('square+sine', n, seed)
+        assert s.size == n and np.ptp(s) > 0
+
+
+def test_square_and_sine_of_a_usual_length_is_unchanged():
+    # the sine's amplitude is set from the square's spread as before
+    # wherever the square switches (any record longer than 91 samples)
+    s = sw.data.excitation('square+sine', 500, 3)
+    rng = np.random.default_rng(3)
+    raw = sw.data.synthetic._GENERATORS['square+sine'](500, rng)
+    np.testing.assert_array_equal(s, sw.data.synthetic._unit(raw))
+
+
+def test_a_drive_case_at_a_random_drive_sample_time():
+    d = sw.data.random_drive(3)
+    case = sw.data.drive_case(0, d['loop'], d['play'], n=400, dt=d['dt'],
+                              **d['params'])
+    assert case.dt == d['dt']
+    default = sw.data.drive_case(0, n=400)
+    assert default.dt == sw.data.DRIVE_DT
