@@ -66,6 +66,12 @@ class _OddPlant:
         return self.value
 
 
+def _circular():
+    d = {}
+    d['self'] = d
+    return d
+
+
 def _Result(**fields):
     """An object that passes for an identification result of PLANT."""
     import types
@@ -400,6 +406,24 @@ ROWS = [
     ('load_model-q1-huge',
      lambda t: sw.load_model(_file(t, 'q.json', _model_json(q1=BIG))), VE,
      "q.json.*'q1'"),
+    ('load_model-m1-huge-int',
+     lambda t: sw.load_model(_file(t, 'm.json', _model_json(m1=10 ** 400))),
+     VE, "m.json.*'m1'"),
+    ('load_model-dt-huge-int',
+     lambda t: sw.load_model(_file(t, 'd.json', _model_json(dt=10 ** 400))),
+     VE, "d.json.*'dt'"),
+    ('load_model-deep-json',
+     lambda t: sw.load_model(_file(t, 'deep.json', '[' * 100000)), VE,
+     "deep.json' is not valid JSON"),
+    ('save_model-metadata-circular',
+     lambda t: sw.save_model(PLANT, t / 'm.json', metadata=_circular()), VE,
+     'circular'),
+    ('save_model-metadata-key',
+     lambda t: sw.save_model(PLANT, t / 'm.json', metadata={1: 'a'}), TE,
+     'keys must be strings'),
+    ('save_model-metadata-huge-int',
+     lambda t: sw.save_model(PLANT, t / 'm.json', metadata={'n': 10 ** 400}),
+     VE, "metadata\\['n'\\]"),
     ('load_model-q1-float',
      lambda t: sw.load_model(_file(t, 'q.json', _model_json(q1=1.0))), VE,
      "q.json.*'q1'"),
@@ -441,6 +465,36 @@ ROWS = [
                              return_metadata='yes'), TE, 'return_metadata'),
     # ------------------------------------------------------------------
     # tools: plotting
+    ('plot_hysteresis-normalize-str',
+     lambda t: sw.plot_hysteresis(BL, normalize='no'), TE, 'normalize'),
+    ('plot_hysteresis-lines-str',
+     lambda t: sw.plot_hysteresis(BL, lines='no'), TE, 'lines'),
+    ('compare-plot-str',
+     lambda t: sw.compare(PLANT, U, Y, plot='no'), TE, 'plot'),
+    ('compare-labels-int',
+     lambda t: sw.compare(PLANT, U, Y, labels=3, plot=False), TE, 'labels'),
+    ('residuals-plot-str',
+     lambda t: sw.residuals(PLANT, (U, Y), lags=5, plot='no'), TE, 'plot'),
+    ('max_relative_error-scale-array',
+     lambda t: sw.max_relative_error(Y, Y, scale=np.array(['peak', 'range'])),
+     VE, 'scale'),
+    ('steps_and_sines-levels-too-many',
+     lambda t: sw.steps_and_sines(4, levels=[1, 2, 3, 4, 5, 6]), VE,
+     'levels'),
+    ('steps_and_sines-n-huge',
+     lambda t: sw.steps_and_sines(10 ** 13), VE, 'n'),
+    ('TrackingController-direct',
+     lambda t: sw.TrackingController(1, 2, 3, 4, 5, 6), TE, 'feedback'),
+    ('closed_loop_demo-reference-still',
+     lambda t: sw.closed_loop_demo(PLANT, PLANT, reference=np.zeros(20)), VE,
+     'reference must move'),
+    ('SandwichSystem.normalized-overflow',
+     lambda t: sw.SandwichSystem.from_coefficients(
+         [.1], [1e200], [.2], [1e200], 1, 1, .1, .1).normalized(), VE,
+     'normalised slopes'),
+    ('backlash_nonlinearity-describing_function-huge-A',
+     lambda t: sw.backlash_nonlinearity(BL).describing_function(5e307), VE,
+     'too large'),
     ('plot_hysteresis-model', lambda t: sw.plot_hysteresis('model'), TE,
      'model_or_backlash'),
     ('plot_hysteresis-true', lambda t: sw.plot_hysteresis(BL, true=3), TE,

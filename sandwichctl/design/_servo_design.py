@@ -575,8 +575,11 @@ def loop_margins(num, den, C):
     cross = np.flatnonzero(np.diff(np.sign(mag - 1)) != 0)
     pm = (float(np.min(180 - np.degrees(np.abs(ang[cross]))))
           if cross.size else np.inf)
-    turn = np.flatnonzero((np.diff(np.sign(L.imag)) != 0) & (L.real[1:] < 0))
-    gm = float(np.min(1 / mag[turn + 1])) if turn.size else np.inf
+    turn = np.flatnonzero((np.diff(np.sign(L.imag)) != 0)
+                          & (L.real[1:] < 0)) + 1
+    if L.real[-1] < 0:              # -180 deg at the Nyquist frequency
+        turn = np.r_[turn, w.size - 1]
+    gm = float(np.min(1 / mag[turn])) if turn.size else np.inf
     return mm, gm, pm, loop_radius(num, den, C)
 
 

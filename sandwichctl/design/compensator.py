@@ -15,13 +15,16 @@ the compensated plant from v_d to y is the linear system
 inverses are in module `inverse`.
 """
 
+import warnings
+
 import numba
 import numpy as np
 import control as ct
 
 from .inverse import BacklashInverse, _causal_inverse, _inverse_step
 from ..model._kernel import _ss_output, _ss_update
-from ..model.sandwich import SandwichSystem, _settling_samples
+from ..model.sandwich import (SandwichSystem, _settling_samples,
+                              _warn_divergence)
 from .._checks import (check_positive, check_bool, check_name, check_label,
                        check_signal, check_vector, check_timepts)
 
@@ -106,8 +109,15 @@ class SandwichCompensator(ct.InterconnectedSystem):
         self._band_fraction = band_fraction
         self._approximate = bool(approximate)
         # named parts, so that their names survive pickling
-        self._L1_inverse, reflected = _causal_inverse(model.L1, approximate,
-                                                      name='L1_inverse')
+        with np.errstate(all='ignore'), warnings.catch_warnings():
+            warnings.simplefilter('ignore')     # scipy's, on a tiny gain
+            self._L1_inverse, reflected = _causal_inverse(
+                model.L1, approximate, name='L1_inverse')
+        inverse = np.r_[self._L1_inverse.num[0][0], self._L1_inverse.den[0][0]]
+        if not np.all(np.isfinite(inverse)):
+            raise ValueError("model.L1's gain is too small to invert: the "
+                             "coefficients of L1^-1 overflow a float "
+                             "(rescale u or x)")
         self._exact_L1 = not reflected
         self._delay = co['q1']
         self._design_plant = ct.tf(
@@ -190,6 +200,7 @@ class SandwichCompensator(ct.InterconnectedSystem):
         _compensator_kernel(v_d, inv.m1, inv.m2, inv.D1, inv.D2,
                             inv.smoothing, *self._matrices, state, u, x_d,
                             v_hat)
+        _warn_divergence(self.name, u, state, timepts)
         outputs = np.vstack([u, x_d, v_hat]) if internal else u
         labels = (['u', 'x_d', 'v_hat'] if internal
                   else self.output_labels)

@@ -52,10 +52,11 @@ class CompensationDemo:
         self.controller_without = controller_without
         self.rms_with = _rms(reference - with_compensation.outputs[0])
         self.rms_without = _rms(reference - without_compensation.outputs[0])
-        self.ratio = self.rms_with / self.rms_without
-        self.activity_ratio = (
-            np.sum(np.abs(np.diff(with_compensation.outputs[1])))
-            / np.sum(np.abs(np.diff(without_compensation.outputs[1]))))
+        with np.errstate(all='ignore'):   # a loop that tracks exactly
+            self.ratio = float(np.float64(self.rms_with) / self.rms_without)
+            self.activity_ratio = (
+                np.sum(np.abs(np.diff(with_compensation.outputs[1])))
+                / np.sum(np.abs(np.diff(without_compensation.outputs[1]))))
 
     def plot(self, axs=None):
         """Plot r and y, the tracking errors, and u of both loops.
@@ -72,6 +73,12 @@ class CompensationDemo:
         import matplotlib.pyplot as plt
         if axs is None:
             _, axs = plt.subplots(3, 1, sharex=True, figsize=(9, 7))
+        flat = np.ravel(np.asarray(axs, dtype=object))
+        if flat.size != 3 or not all(hasattr(ax, 'plot') for ax in flat):
+            raise ValueError(f"axs must be 3 matplotlib Axes (rows for the "
+                             f"output, the error and the input); got "
+                             f"{axs!r:.60}")
+        axs = flat
         t = self.with_compensation.time
         yw, uw = self.with_compensation.outputs[:2]
         yo, uo = self.without_compensation.outputs[:2]
@@ -162,6 +169,10 @@ def closed_loop_demo(plant, model, reference=None, smoothing=0.0,
     common_dt('plant', plant.dt, 'model', model.dt)
     r = steps_and_sines() if reference is None else \
         check_signal('reference', reference)
+    if not (r.size >= 2 and np.ptp(r) > 0):
+        raise ValueError(f"reference must move (two samples or more, not "
+                         f"all equal) for the loops to be compared; got "
+                         f"{r.size} sample{'s' if r.size != 1 else ''}")
     comp = sandwich_compensator(model, smoothing=smoothing,
                                 band_fraction=band_fraction,
                                 approximate=approximate)
@@ -176,4 +187,5 @@ def closed_loop_demo(plant, model, reference=None, smoothing=0.0,
 
 
 def _rms(e):
-    return float(np.sqrt(np.mean(np.square(e))))
+    with np.errstate(over='ignore'):     # a loop that diverged: inf
+        return float(np.sqrt(np.mean(np.square(e))))

@@ -154,6 +154,10 @@ def _centring_bias(A, v_mean, m1, m2, D1, D2):
     while sign * f(far) <= 0:
         step *= 2
         far = c_b + sign * step
+        if not math.isfinite(far):
+            raise ValueError(f"no input bias centres the backlash's output "
+                             f"at {v_mean!r} for A={A!r}: the search for "
+                             f"it overflows a float")
     lo, hi = sorted((c_b, far))
     return brentq(f, lo, hi, xtol=1e-14, rtol=4 * np.finfo(float).eps)
 
@@ -213,6 +217,11 @@ class BacklashNonlinearity(ct.DescribingFunctionNonlinearity):
             Amplitude of the sinusoidal input, >= 0.
         """
         A = check_nonnegative('A', A)
+        if not math.isfinite(4 * max(self.m1, self.m2)
+                             * (A + self.D1 + self.D2)):
+            raise ValueError(
+                f"A={A!r} is too large for these slopes: the backlash's "
+                f"output (about max(m1, m2) A) overflows a float")
         if self.input_bias is not None:
             return self.input_bias
         if A == 0:

@@ -74,7 +74,7 @@ import numba
 import numpy as np
 import control as ct
 
-from ..model.backlash import Backlash, backlash_step
+from ..model.backlash import Backlash, backlash_step, finite_input
 from ..model.sandwich import SandwichSystem
 from .._checks import (check_discrete_siso_tf, check_nonnegative,
                        check_positive, check_signal, common_dt, check_dt,
@@ -196,18 +196,20 @@ def backlash_inverse_response(v_d, m1, m2, D1, D2, x_prev=0.0, v_prev=0.0,
     return (x, v_hat) if return_expected else x
 
 
-def _inverse_update(t, state, inp, params):
-    p = params
-    return np.array(_inverse_step(inp[0], state[0], state[1], p['m1_hat'],
-                                  p['m2_hat'], p['D1_hat'], p['D2_hat'],
-                                  p['smoothing']))
+def _inverse_functions(m1, m2, D1, D2, smoothing):
+    """Update and output functions of one inverse (parameters fixed, in
+    closures: python-control merges the ``params`` of all the blocks of an
+    interconnection into one dict, so two inverses held there would share
+    one set)."""
+    def update(t, state, inp, params):
+        return np.array(_inverse_step(finite_input(t, inp[0]), state[0],
+                                      state[1], m1, m2, D1, D2, smoothing))
 
-
-def _inverse_output(t, state, inp, params):
-    p = params
-    return np.array(_inverse_step(inp[0], state[0], state[1], p['m1_hat'],
-                                  p['m2_hat'], p['D1_hat'], p['D2_hat'],
-                                  p['smoothing'])[:1])
+    def output(t, state, inp, params):
+        return np.array(_inverse_step(finite_input(t, inp[0]), state[0],
+                                      state[1], m1, m2, D1, D2,
+                                      smoothing)[:1])
+    return update, output
 
 
 class BacklashInverse(ct.NonlinearIOSystem):
@@ -239,12 +241,11 @@ class BacklashInverse(ct.NonlinearIOSystem):
 
     Notes
     -----
-    The parameters are stored as python-control params named ``m1_hat``,
-    ``m2_hat``, ``D1_hat``, ``D2_hat`` (the estimates being inverted) and
-    ``smoothing``, not ``m1``...: python-control merges the params of all
-    blocks of an interconnection into one dict and pushes it back to every
-    block, so an inverse whose params were called ``m1``... would silently
-    take the plant backlash's values (or give them its own).
+    The parameters are read-only attributes, not python-control
+    ``params``: python-control merges the params of all blocks of an
+    interconnection into one dict and pushes it back to every block, so
+    two inverses there (or an inverse and a plant's backlash) would
+    silently share one set.
 
     See Also
     --------
@@ -265,19 +266,18 @@ class BacklashInverse(ct.NonlinearIOSystem):
 
     def __init__(self, m1, m2, D1, D2, smoothing=0.0, dt=True, name=None,
                  inputs='v_d', outputs='x', states=('x_prev', 'v_prev')):
-        params = {'m1_hat': check_positive('m1', m1),
-                  'm2_hat': check_positive('m2', m2),
-                  'D1_hat': check_nonnegative('D1', D1),
-                  'D2_hat': check_nonnegative('D2', D2),
-                  'smoothing': check_nonnegative('smoothing', smoothing)}
+        self._values = (check_positive('m1', m1), check_positive('m2', m2),
+                        check_nonnegative('D1', D1),
+                        check_nonnegative('D2', D2),
+                        check_nonnegative('smoothing', smoothing))
         dt = check_dt('dt', dt)
         name = check_name('name', name)
         inputs = check_label('inputs', inputs, 'input')
         outputs = check_label('outputs', outputs, 'output')
         states = check_labels('states', states, 2)
-        super().__init__(
-            _inverse_update, _inverse_output, inputs=inputs, outputs=outputs,
-            states=states, dt=dt, name=name, params=params)
+        update, output = _inverse_functions(*self._values)
+        super().__init__(update, output, inputs=inputs, outputs=outputs,
+                         states=states, dt=dt, name=name)
 
     def __reduce__(self):
         # rebuild from plain data, as Backlash does (robust to changes in
@@ -287,13 +287,11 @@ class BacklashInverse(ct.NonlinearIOSystem):
                              self.input_labels[0], self.output_labels[0],
                              list(self.state_labels)))
 
-    m1 = property(lambda self: self.params['m1_hat'], doc="Increase slope.")
-    m2 = property(lambda self: self.params['m2_hat'], doc="Decrease slope.")
-    D1 = property(lambda self: self.params['D1_hat'],
-                  doc="Increase threshold.")
-    D2 = property(lambda self: self.params['D2_hat'],
-                  doc="Decrease threshold.")
-    smoothing = property(lambda self: self.params['smoothing'],
+    m1 = property(lambda self: self._values[0], doc="Increase slope.")
+    m2 = property(lambda self: self._values[1], doc="Decrease slope.")
+    D1 = property(lambda self: self._values[2], doc="Increase threshold.")
+    D2 = property(lambda self: self._values[3], doc="Decrease threshold.")
+    smoothing = property(lambda self: self._values[4],
                          doc="Smoothing width (0: exact inverse).")
 
     def response(self, v_d, x_prev=0.0, v_prev=0.0, return_expected=False):

@@ -118,9 +118,9 @@ def servo_loop(plant, r, ctrl):
         if not math.isfinite(uk):
             raise OverflowError(
                 f"u overflowed at sample {k} (y = {yk!r}, r_ahead = "
-                f"{float(r_ahead[k])!r}): too large for the controller's gains, "
-                f"so it was not applied to the plant (scale the data as the "
-                f"design's model was identified)")
+                f"{float(r_ahead[k])!r}): too large for the controller's "
+                f"gains, so it was not applied to the plant (scale the data "
+                f"as the design's model was identified)")
         y[k], u[k] = yk, uk
         if k + 1 < n:
             yk = _measured(_call(plant.step, 'step(u)', k + 1, uk),

@@ -43,11 +43,16 @@ def steps_and_sines(n=1200, levels=(0.0, 1.0, -0.5, 1.5, 0.3),
     [ 0.  0.  0.  0.  0.  1.  1.  1.  1.  1.  0.  1.  0. -1. -0.  1.  0. -1.
      -0.  1.]
     """
-    n = check_int('n', n, minimum=2)
+    n = check_int('n', n, minimum=2, maximum=MOST_SAMPLES)
     levels = check_vector('levels', levels)
     if levels.size == 0:
         raise ValueError("levels must hold at least one level (the first "
                          "half of the reference steps through them)")
+    if levels.size > n // 2:
+        raise ValueError(f"levels must fit in the first half of the n = {n} "
+                         f"samples, one sample each at least; got "
+                         f"{levels.size} levels (give n >= "
+                         f"{2 * levels.size})")
     amplitudes = check_vector('amplitudes', amplitudes)
     periods = check_vector('periods', periods, amplitudes.size)
     if np.any(periods <= 0):

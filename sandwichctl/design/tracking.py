@@ -64,6 +64,11 @@ class TrackingController:
     """
 
     def __init__(self, feedback, feedforward, preview, design_plant, kp, ki):
+        for name, sys in (('feedback', feedback),
+                          ('feedforward', feedforward),
+                          ('design_plant', design_plant)):
+            if sys is not None or name == 'feedback':
+                check_discrete_siso_tf(name, sys)
         self.feedback = feedback
         self.feedforward = feedforward
         self.preview = preview
@@ -72,11 +77,7 @@ class TrackingController:
         self.margins = self.pole_radius = None
         if design_plant is not None:
             loop = feedback * design_plant
-            with warnings.catch_warnings():
-                # ct.stability_margins may evaluate the loop at its
-                # integrator pole z = 1 and warn about the division
-                warnings.simplefilter('ignore', RuntimeWarning)
-                self.margins = ct.stability_margins(loop)
+            self.margins = _margins(loop)
             self.pole_radius = float(np.max(np.abs(
                 ct.feedback(loop, 1).poles())))
 
@@ -113,11 +114,39 @@ class TrackingController:
                     f" feedforward={self.feedforward is not None}, "
                     f"preview={self.preview})")
         gm, pm, sm = self.margins[:3]
-        return (f"TrackingController(kp={self.kp:.4g}, ki={self.ki:.4g}, "
+        gains = (f"kp={self.kp:.4g}, ki={self.ki:.4g}" if self.kp is not None
+                 else f"feedback={_tf_text(self.feedback)}")
+        return (f"TrackingController({gains}, "
                 f"feedforward={self.feedforward is not None}, "
                 f"preview={self.preview}, pole_radius={self.pole_radius:.3f},"
                 f" gain_margin={gm:.3g}, phase_margin={pm:.3g}, "
                 f"modulus_margin={sm:.3g})")
+
+
+def _margins(loop):
+    """``ct.stability_margins(loop)`` with the gain margin read on a log
+    grid from below the slowest pole to the Nyquist frequency, where the
+    loop is real: python-control's took the integrator's z = 1 for a
+    phase crossover (a gain margin of 1e-16 for a PI on a first-order
+    plant, whose loop doubles its gain safely)."""
+    with warnings.catch_warnings():
+        # it may evaluate the loop at its integrator pole z = 1 and warn
+        # about the division
+        warnings.simplefilter('ignore', RuntimeWarning)
+        _, pm, sm, _, wgc, wms = ct.stability_margins(loop)
+    num, den = loop.num[0][0], loop.den[0][0]
+    w = frequency_grid(den, 6000)
+    z = np.exp(1j * w)
+    L = np.polyval(num, z) / np.polyval(den, z)
+    turn = np.flatnonzero((np.diff(np.sign(L.imag)) != 0)
+                          & (L.real[1:] < 0)) + 1
+    if L.real[-1] < 0:                       # -180 deg at z = -1
+        turn = np.r_[turn, w.size - 1]
+    gm, wpc = np.inf, np.nan
+    if turn.size:
+        k = turn[np.argmax(np.abs(L[turn]))]
+        gm, wpc = 1 / abs(L[k]), w[k] / (1.0 if loop.dt is True else loop.dt)
+    return gm, pm, sm, wpc, wgc, wms
 
 
 def tracking_controller(sys, feedforward=True, modulus_margin=0.6,

@@ -35,6 +35,8 @@ with eq. (2.2) only where :math:`m_1(x-D_1) \le m_2(x+D_2)`; sandwichctl
 always follows eq. (2.2). See `Backlash.crossing`.
 """
 
+import math
+
 import numba
 import numpy as np
 import control as ct
@@ -120,13 +122,26 @@ def backlash_response(x, m1, m2, D1, D2, x_prev=0.0, v_prev=0.0,
 def _backlash_functions(m1, m2, D1, D2):
     """Update and output functions of one backlash (parameters fixed)."""
     def update(t, state, inp, params):
-        v, _ = backlash_step(inp[0], state[0], state[1], m1, m2, D1, D2)
-        return np.array([inp[0], v])
+        x = finite_input(t, inp[0])
+        v, _ = backlash_step(x, state[0], state[1], m1, m2, D1, D2)
+        return np.array([x, v])
 
     def output(t, state, inp, params):
-        v, _ = backlash_step(inp[0], state[0], state[1], m1, m2, D1, D2)
+        v, _ = backlash_step(finite_input(t, inp[0]), state[0], state[1],
+                             m1, m2, D1, D2)
         return np.array([v])
     return update, output
+
+
+def finite_input(t, value):
+    """A block's input through python-control (at time t), as a float;
+    not finite raises (a NaN would stick in the backlash's memory, or
+    make python-control report an algebraic loop)."""
+    x = float(value)
+    if not math.isfinite(x):
+        raise ValueError(f"an input of the backlash is not finite ({x!r}); "
+                         f"its memory cannot hold it")
+    return x
 
 
 class Backlash(ct.NonlinearIOSystem):

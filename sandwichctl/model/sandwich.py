@@ -254,10 +254,16 @@ class SandwichSystem(ct.InterconnectedSystem):
         if b0 < 0:
             m1, m2, D1, D2 = m2, m1, D2, D1
         sb, sd = abs(b0), abs(d0)
+        with np.errstate(over='ignore', under='ignore'):
+            m1, m2 = m1 * sb * sd, m2 * sb * sd
+        if not (np.isfinite(m1) and np.isfinite(m2) and m1 > 0 < m2):
+            raise ValueError(f"the normalised slopes m * |b0| * |d0| leave a "
+                             f"float (b0 = {b0:.3g}, d0 = {d0:.3g}): rescale "
+                             f"L1's and L2's gains")
         return SandwichSystem.from_coefficients(
             a=co['a'], b=co['b'] / b0, c=co['c'],
             d=co['d'] / sd * (1.0 if b0 > 0 else -1.0),
-            m1=m1 * sb * sd, m2=m2 * sb * sd, D1=D1 / sb, D2=D2 / sb,
+            m1=m1, m2=m2, D1=D1 / sb, D2=D2 / sb,
             q1=co['q1'], q2=co['q2'], dt=self.dt, name=self.name,
             inputs=self.input_labels[0], outputs=self.output_labels[0])
 

@@ -112,9 +112,10 @@ def save_model(model, path, metadata=None):
     ------
     TypeError
         If `model` is not a `SandwichSystem` or `metadata` is not a dict
-        of JSON-serialisable values.
+        of JSON-serialisable values with string keys.
     ValueError
-        If `metadata` contains NaN or infinity (not valid JSON).
+        If `metadata` contains NaN or infinity (not valid JSON), itself,
+        or an int too large for a float.
 
     See Also
     --------
@@ -132,8 +133,9 @@ def save_model(model, path, metadata=None):
     True
     """
     _check_path(path, 'write')
+    data = _to_dict(model, metadata)
     try:
-        text = _dumps(_to_dict(model, metadata))
+        text = _dumps(data)
     except ValueError as exc:
         raise ValueError(f"metadata must not contain NaN or infinity, which "
                          f"JSON cannot represent ({exc}); store them as "
@@ -211,9 +213,10 @@ def load_model(path, return_metadata=False):
                 f"numpy)") from None
     try:
         data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{where} is not valid JSON ({exc}); expected a "
-                         f"model written by sandwichctl.save_model") from None
+    except (ValueError, RecursionError) as exc:   # JSONDecodeError too
+        raise ValueError(f"{where} is not valid JSON for a model "
+                         f"({_short(str(exc))}); expected a model written "
+                         f"by sandwichctl.save_model") from None
     model, metadata = _from_dict(data, where)
     return (model, metadata) if return_metadata else model
 
@@ -228,6 +231,7 @@ def _to_dict(model, metadata):
     if not isinstance(metadata, dict):
         raise TypeError(f"metadata must be a dict; got "
                         f"{type(metadata).__name__}")
+    _check_metadata(metadata, 'metadata', set())
     co = model.coefficients
     name = model.name
     if name is None or re.match(r'^sys\[\d*\]$', name):
@@ -286,9 +290,9 @@ def _from_dict(data, where):
     dt = data['dt']
     if not (dt is True or (isinstance(dt, numbers.Real)
                            and not isinstance(dt, bool)
-                           and math.isfinite(dt) and dt > 0)):
+                           and _finite_float(dt) and dt > 0)):
         raise ValueError(f"{where}: 'dt' must be a positive number or true;"
-                         f" got {dt!r}")
+                         f" got {_short(dt)}")
     for key, default in (('name', None), ('inputs', 'u'), ('outputs', 'y')):
         value = data.get(key, default)
         if not (isinstance(value, str) and value) and not (
@@ -324,9 +328,19 @@ def _number(where, key, value):
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise ValueError(f"{where}: {key!r} must be a number; got "
                          f"{type(value).__name__} {_short(value)}")
-    if not math.isfinite(value):
-        raise ValueError(f"{where}: {key!r} must be finite; got {value!r}")
+    if not _finite_float(value):
+        raise ValueError(f"{where}: {key!r} must be a finite float; got "
+                         f"{_short(value)}")
     return float(value)
+
+
+def _finite_float(value):
+    """Whether a real number is a finite float (an int of 400 digits is
+    not: float() overflows)."""
+    try:
+        return math.isfinite(float(value))
+    except OverflowError:
+        return False
 
 
 def _integer(where, key, value):
@@ -340,7 +354,10 @@ def _integer(where, key, value):
 
 
 def _short(value):
-    text = repr(value)
+    try:
+        text = repr(value)
+    except ValueError:          # an int of more digits than Python prints
+        return f"an int of {value.bit_length()} bits"
     return text if len(text) <= 60 else text[:57] + '...'
 
 
@@ -388,6 +405,29 @@ def _dt_to_json(dt):
     if isinstance(dt, numbers.Integral):
         return int(dt)
     return float(dt)
+
+
+def _check_metadata(value, where, seen):
+    """What JSON would not give back as it was given is refused, naming
+    the place: keys that are no strings (JSON turns 1 into '1'), a
+    container holding itself, and ints beyond a float (or than Python
+    prints); NaN and infinity are left to json (allow_nan=False)."""
+    if isinstance(value, (dict, list, tuple)):
+        if id(value) in seen:
+            raise ValueError(f"{where} holds itself (a circular reference); "
+                             f"JSON cannot store it")
+        seen = seen | {id(value)}
+        items = (value.items() if isinstance(value, dict)
+                 else enumerate(value))
+        for key, item in items:
+            if isinstance(value, dict) and not isinstance(key, str):
+                raise TypeError(f"{where} keys must be strings (JSON stores "
+                                f"every key as one); got {key!r}")
+            _check_metadata(item, f"{where}[{key!r}]", seen)
+    elif isinstance(value, int) and not isinstance(value, bool) \
+            and not _finite_float(value):
+        raise ValueError(f"{where} is an int too large for a float; store "
+                         f"it as a string")
 
 
 def _json_default(obj):

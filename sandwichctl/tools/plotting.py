@@ -10,7 +10,7 @@ import numpy as np
 
 from ..model.backlash import Backlash
 from ..model.sandwich import SandwichSystem
-from .._checks import check_signal, check_axes
+from .._checks import check_signal, check_axes, check_bool
 
 __all__ = ['plot_hysteresis']
 
@@ -84,6 +84,8 @@ def plot_hysteresis(model_or_backlash, x=None, true=None, ax=None,
     >>> ax.get_xlabel(), ax.get_ylabel()
     ('x', 'v')
     """
+    normalize = check_bool('normalize', normalize)
+    lines = check_bool('lines', lines)
     model = _as_backlash('model_or_backlash', model_or_backlash, normalize)
     reference = (None if true is None
                  else _as_backlash('true', true, normalize))

@@ -38,7 +38,7 @@ import control as ct
 
 from ..model.sandwich import SandwichSystem
 from .experiments import as_experiments
-from .._checks import check_int
+from .._checks import check_bool, check_int
 
 __all__ = ['residuals', 'ResidualResult']
 
@@ -285,6 +285,7 @@ def residuals(model, data, lags=25, ax=None, plot=True):
     model = _check_model(model, exps.dt)
     shortest = min(u.size for u in exps.u)
     lags = check_int('lags', lags, minimum=1)
+    plot = check_bool('plot', plot)
     if lags >= shortest:
         raise ValueError(f"lags must be below the length of the shortest "
                          f"experiment ({shortest} samples); got {lags}")

@@ -34,7 +34,8 @@ import control as ct
 
 from ..model.sandwich import SandwichSystem
 from .experiments import as_experiments
-from .._checks import check_signal, check_int, check_axes, SimulationWarning
+from .._checks import (check_signal, check_int, check_axes, check_bool,
+                       SimulationWarning)
 
 __all__ = ['fit_percent', 'nrmse', 'max_relative_error', 'compare',
            'CompareResult', 'CompareResultList']
@@ -76,13 +77,18 @@ def nrmse(y, yhat):
     0.7071
     """
     y, yhat = _check_pair(y, yhat)
-    spread = np.linalg.norm(y - y.mean())
+    # far from 1, both norms are scaled by y's peak, so that y of 1e200 or
+    # 1e-200 neither overflows nor underflows (the ratio is the same)
+    peak = float(np.max(np.abs(y)))
+    scale = peak if not 1e-100 <= peak <= 1e100 and peak > 0 else 1.0
+    spread = np.linalg.norm((y - y.mean()) / scale)
     if spread == 0:
         raise ValueError(
-            f"y is constant (every sample is {y[0]!r}), so its deviation "
-            f"from the mean is zero and the normalised error is undefined; "
-            f"compare on data that excites the output")
-    return float(np.linalg.norm(y - yhat) / spread)
+            f"y is constant (every sample is {float(y[0])!r}), so its "
+            f"deviation from the mean is zero and the normalised error is "
+            f"undefined; compare on data that excites the output")
+    with np.errstate(over='ignore'):
+        return float(np.linalg.norm((y - yhat) / scale) / spread)
 
 
 def fit_percent(y, yhat):
@@ -167,6 +173,8 @@ def max_relative_error(y, yhat, scale='peak'):
     0.1667
     """
     y, yhat = _check_pair(y, yhat)
+    if not isinstance(scale, str) or scale not in ('peak', 'range'):
+        raise ValueError(f"scale must be 'peak' or 'range'; got {scale!r}")
     if scale == 'peak':
         denominator = np.max(np.abs(y))
         what = 'the peak magnitude max|y|'
@@ -423,6 +431,7 @@ def compare(model, u, y=None, ax=None, initial_state=None, timepts=None,
     1
     """
     ax = check_axes('ax', ax)
+    plot = check_bool('plot', plot)
     if y is None:
         data = as_experiments(u)
         if len(data) > 1:
@@ -447,6 +456,10 @@ def compare(model, u, y=None, ax=None, initial_state=None, timepts=None,
                   for i, m in enumerate(models)]
     elif isinstance(labels, str):
         labels = [labels]
+    if not (isinstance(labels, (list, tuple))
+            and all(isinstance(label, str) for label in labels)):
+        raise TypeError(f"labels must be a string or a list of strings, one "
+                        f"per model; got {labels!r}")
     if len(labels) != len(models):
         raise ValueError(f"labels must have one entry per model "
                          f"({len(models)}); got {len(labels)}")

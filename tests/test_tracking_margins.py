@@ -1,0 +1,40 @@
+"""The tracking controller's gain margin is the factor on the loop gain
+that makes the loop unstable: python-control's took the PI's integrator
+at z = 1 for a phase crossover (1e-16 on a first-order plant)."""
+
+import numpy as np
+import control as ct
+import pytest
+
+import sandwichctl as sw
+
+PLANT = sw.examples.paper_plant()
+
+
+@pytest.mark.parametrize('P', [ct.tf([1], [1, -0.5], 1),
+                               ct.tf([0.5], [1, -0.8], 1),
+                               ct.tf([0.1], [1, -1], 1),
+                               PLANT.L1 * PLANT.L2])
+def test_the_gain_margin_is_where_the_loop_turns_unstable(P):
+    ctrl = sw.tracking_controller(P)
+    gm = ctrl.margins[0]
+    assert 1.5 < gm < 1e3
+    loop = ctrl.feedback * P
+    radius = [np.max(np.abs(ct.feedback(f * gm * loop, 1).poles()))
+              for f in (0.98, 1.02)]
+    assert radius[0] < 1 < radius[1]
+    # the servo controller reads the same crossing at the Nyquist frequency
+    servo = sw.servo_controller(P) if P is not PLANT.L1 * PLANT.L2 else None
+    if servo is not None and np.isfinite(servo.margins['gain']):
+        L = servo.pid * servo.design_plant
+        g = servo.margins['gain']
+        assert np.max(np.abs(ct.feedback(1.02 * g * L, 1).poles())) > 1
+
+
+def test_a_controller_from_feedback_prints_its_margins():
+    comp = sw.sandwich_compensator(PLANT)
+    ctrl = sw.TrackingController.from_feedback(ct.tf([0.2, 0], [1, -1], 1),
+                                               comp.design_plant)
+    text = repr(ctrl)
+    assert 'feedback=' in text and 'gain_margin=' in text
+    assert ctrl.kp is None and np.isfinite(ctrl.margins[0])
