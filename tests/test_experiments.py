@@ -161,3 +161,15 @@ def test_a_u_y_tuple_works_at_every_entry_point(pair):
         assert table.best['success']
         many, = sw.identify_many([(u, y)], **plant.orders, processes=1)
         np.testing.assert_array_equal(many.theta, res.theta)
+
+
+def test_a_pair_of_columns_is_one_experiment():
+    # (u[:, None], y[:, None]) was read as two experiments of one array
+    # each, while [(u[:, None], y[:, None])] was one
+    u = np.random.default_rng(0).standard_normal(50)
+    y = 2 * u
+    for data in ((u[:, None], y[:, None]), [(u[:, None], y[:, None])]):
+        exps = sw.as_experiments(data)
+        assert len(exps) == 1
+        np.testing.assert_array_equal(exps.u[0], u)
+        np.testing.assert_array_equal(exps.y[0], y)

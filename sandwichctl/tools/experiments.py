@@ -64,13 +64,15 @@ class Experiments(list):
 
 
 def _is_signal(value):
-    """True for a 1-D array-like of numbers (one signal)."""
+    """True for a 1-D array-like of numbers (one signal), or a column of
+    them (N, 1)."""
     if isinstance(value, ct.TimeResponseData):
         return False
     try:
-        return np.asarray(value, dtype=float).ndim == 1
+        arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
         return False
+    return arr.ndim == 1 or (arr.ndim == 2 and arr.shape[1] == 1)
 
 
 def _time_step(t, where):
