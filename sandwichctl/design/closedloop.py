@@ -116,10 +116,11 @@ def closed_loop_response(plant, reference, controller, compensator=None):
     `SandwichSystem`, a discrete SISO ``ct.TransferFunction`` or any object
     with a ``step(u) -> y`` method (a simulator of one's own, or
     hardware in the loop; optional ``reset()`` and ``read() -> y(0)`` are
-    called first, and a numeric ``dt`` attribute must equal the
-    controller's). The controller is reset, then at every sample
-    ``u(k) = controller.step(r(k + preview), y(k))``, exactly as stepping
-    it by hand. The result has the outputs y and u.
+    called first, and a ``dt`` attribute other than None or True must be
+    a number equal to the controller's). The controller is reset, then at
+    every sample ``u(k) = controller.step(r(k + preview), y(k))``, exactly
+    as stepping it by hand; a u that overflows is not applied (the loop
+    raises ``OverflowError``). The result has the outputs y and u.
 
     **With a** `TrackingController` (the paper's design), the plant is a
     `SandwichSystem` and the loop is
@@ -155,7 +156,10 @@ def closed_loop_response(plant, reference, controller, compensator=None):
     Raises
     ------
     ValueError
-        If the sampling times disagree or the plant has no delay.
+        If the sampling times disagree or the plant has no delay, or a
+        user's plant returns a y that is not finite.
+    OverflowError
+        If a `ServoController`'s u overflows against a user's plant.
 
     Warns
     -----
