@@ -65,3 +65,12 @@ def test_the_describing_function_of_a_huge_swing_raises_instead_of_hanging():
     with pytest.raises(ValueError, match='too large'):
         wide.describing_function(1e120)
     assert np.isfinite(F.describing_function(3.0))
+
+
+def test_an_l1_too_small_to_invert_is_refused():
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore')     # scipy's, building the model
+        tiny = sw.SandwichSystem.from_coefficients(
+            [.1], [1e-310], [.2], [1], 1, 1, .1, .1)
+    with pytest.raises(ValueError, match='too small to invert'):
+        sw.sandwich_compensator(tiny)

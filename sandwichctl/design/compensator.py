@@ -109,15 +109,8 @@ class SandwichCompensator(ct.InterconnectedSystem):
         self._band_fraction = band_fraction
         self._approximate = bool(approximate)
         # named parts, so that their names survive pickling
-        with np.errstate(all='ignore'), warnings.catch_warnings():
-            warnings.simplefilter('ignore')     # scipy's, on a tiny gain
-            self._L1_inverse, reflected = _causal_inverse(
-                model.L1, approximate, name='L1_inverse')
-        inverse = np.r_[self._L1_inverse.num[0][0], self._L1_inverse.den[0][0]]
-        if not np.all(np.isfinite(inverse)):
-            raise ValueError("model.L1's gain is too small to invert: the "
-                             "coefficients of L1^-1 overflow a float "
-                             "(rescale u or x)")
+        self._L1_inverse, reflected = _causal_inverse(model.L1, approximate,
+                                                      name='L1_inverse')
         self._exact_L1 = not reflected
         self._delay = co['q1']
         self._design_plant = ct.tf(
@@ -130,10 +123,17 @@ class SandwichCompensator(ct.InterconnectedSystem):
                               name='backlash_inverse', inputs='v_d',
                               outputs='x_d')
         self._inverse = inv
-        lin = ct.ss(self._L1_inverse, inputs='x_d', outputs='u',
-                    name='L1_inverse')
+        with np.errstate(all='ignore'), warnings.catch_warnings():
+            # scipy's normalisation overflows on an L1 gain of 1e-310
+            warnings.simplefilter('ignore', RuntimeWarning)
+            lin = ct.ss(self._L1_inverse, inputs='x_d', outputs='u',
+                        name='L1_inverse')
         self._matrices = tuple(np.ascontiguousarray(np.asarray(M, float))
                                for M in (lin.A, lin.B, lin.C, lin.D))
+        if not all(np.all(np.isfinite(M)) for M in self._matrices):
+            raise ValueError("model.L1's gain is too small to invert: the "
+                             "state-space form of L1^-1 overflows a float "
+                             "(rescale u or x)")
         super().__init__(
             [inv, lin],
             connections=[['L1_inverse.x_d', 'backlash_inverse.x_d']],
