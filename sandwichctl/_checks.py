@@ -30,6 +30,11 @@ __all__ = ['SandwichWarning', 'IdentificationWarning', 'ExcitationWarning',
 #: would otherwise take minutes and gigabytes before failing.
 MAX_ORDER = 1000
 
+#: Most samples a generated signal or record may have (800 MB of
+#: float64): more is a typo (``n=10**13``) that would otherwise fail with
+#: numpy's MemoryError of terabytes.
+MOST_SAMPLES = 10 ** 8
+
 #: Peak magnitudes of data the identifiers accept: their least-squares
 #: costs are sums of squares (and of products of u and y), which overflow
 #: or underflow double precision far outside this range (1e200 does).

@@ -70,9 +70,9 @@ from dataclasses import dataclass, field
 import numba
 import numpy as np
 
-from .._checks import (PLAIN_REALS, check_bool, check_int, check_positive,
-                       check_nonnegative, check_option, check_real,
-                       check_signal)
+from .._checks import (MOST_SAMPLES, PLAIN_REALS, check_bool, check_int,
+                       check_positive, check_nonnegative, check_option,
+                       check_real, check_signal)
 
 __all__ = ['servo_drive', 'ServoDrive', 'random_drive', 'drive_reference', 'drive_case', 'DriveCase',
            'DRIVE_PARAMETERS', 'DRIVE_DT']
@@ -117,8 +117,6 @@ SPAN = 1e6
 MOST_PLAY = 0.1
 #: most sub-steps a sample (random_drive draws at most a few hundred)
 MOST_SUBSTEPS = 10_000
-#: most samples a drive is set up for or a reference drawn (800 MB)
-MOST_SAMPLES = 10 ** 8
 _LOOPS = ('position', 'speed')
 
 

@@ -55,10 +55,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from ..model.sandwich import SandwichSystem
-from .._checks import check_int, check_positive
-
-#: longest signal or record drawn (800 MB of float64; as `drive`'s)
-MOST_SAMPLES = 10 ** 8
+from .._checks import MOST_SAMPLES, check_int, check_positive
 
 __all__ = ['excitation', 'random_case', 'random_family', 'family_specs',
            'SyntheticCase', 'KINDS', 'SNRS', 'N_RANGE', 'N_BUCKETS']

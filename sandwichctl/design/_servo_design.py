@@ -575,12 +575,20 @@ def loop_margins(num, den, C):
     cross = np.flatnonzero(np.diff(np.sign(mag - 1)) != 0)
     pm = (float(np.min(180 - np.degrees(np.abs(ang[cross]))))
           if cross.size else np.inf)
-    turn = np.flatnonzero((np.diff(np.sign(L.imag)) != 0)
-                          & (L.real[1:] < 0)) + 1
-    if L.real[-1] < 0:              # -180 deg at the Nyquist frequency
-        turn = np.r_[turn, w.size - 1]
+    turn = phase_crossings(L)
     gm = float(np.min(1 / mag[turn])) if turn.size else np.inf
     return mm, gm, pm, loop_radius(num, den, C)
+
+
+def phase_crossings(L):
+    """Indices where the loop L, on a grid ending at the Nyquist
+    frequency, crosses -180 deg: where its imaginary part changes sign on
+    the negative real axis, and the grid's last point, where L is real,
+    when it is negative there (the sign of a rounding-level imaginary
+    part would decide that crossing)."""
+    turn = np.flatnonzero((np.diff(np.sign(L.imag)) != 0)
+                          & (L.real[1:] < 0)) + 1
+    return np.r_[turn, L.size - 1] if L.real[-1] < 0 else turn
 
 
 #: memory of the online estimate of the band's gain, in samples (its

@@ -9,7 +9,8 @@
 
 import numpy as np
 
-from .._checks import check_int, check_vector, check_positive
+from .._checks import (MOST_SAMPLES, check_int, check_vector,
+                       check_positive)
 
 __all__ = ['steps_and_sines', 'servo_reference']
 
@@ -66,10 +67,6 @@ def steps_and_sines(n=1200, levels=(0.0, 1.0, -0.5, 1.5, 0.3),
     r[half:] = sum(a * np.sin(2 * np.pi * k / p)
                    for a, p in zip(amplitudes, periods))
     return r
-
-
-#: most samples `servo_reference` may return (800 MB)
-MOST_SAMPLES = 1e8
 
 
 def servo_reference(dt, travel, hold=0.5):

@@ -87,9 +87,8 @@ from ._servo_guard import guard_scalars
 from ._servo_inputs import (MAX_PREVIEW, check_options, check_plant_tf,
                             unwrap_model)
 from ._servo_kernel import (pack, servo_step, servo_step_kept, servo_run,
-                            adapt_index,
-                            rest_scalars, BAND, GUARD, INVERSE, NSCALAR,
-                            IX_ADAPT, IX_BLEND, IX_GUARD, IX_SCALAR)
+                            adapt_index, rest_scalars, BAND, GUARD, INVERSE,
+                            NSCALAR, IX_ADAPT, IX_BLEND, IX_GUARD, IX_SCALAR)
 from .loop import ss_arrays
 from ..model.sandwich import SandwichSystem
 from .._checks import (MAX_ORDER, PLAIN_REALS, check_finite, check_int,

@@ -15,7 +15,7 @@ import control as ct
 from .inverse import causal_inverse, _fmt_roots
 from .compensator import _tf_text
 from ._servo_design import (at_one, frequency_grid, loop_radius, design_pid,
-                            pid_tf)
+                            phase_crossings, pid_tf)
 from .._checks import (check_discrete_siso_tf, common_dt, check_bool,
                        check_finite)
 
@@ -138,10 +138,7 @@ def _margins(loop):
     w = frequency_grid(den, 6000)
     z = np.exp(1j * w)
     L = np.polyval(num, z) / np.polyval(den, z)
-    turn = np.flatnonzero((np.diff(np.sign(L.imag)) != 0)
-                          & (L.real[1:] < 0)) + 1
-    if L.real[-1] < 0:                       # -180 deg at z = -1
-        turn = np.r_[turn, w.size - 1]
+    turn = phase_crossings(L)
     gm, wpc = np.inf, np.nan
     if turn.size:
         k = turn[np.argmax(np.abs(L[turn]))]
