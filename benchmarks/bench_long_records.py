@@ -26,11 +26,15 @@ private switch ``_long.LONG_RECORD``):
 Run: python benchmarks/bench_long_records.py [--seeds 3] [--repeat 3]
      [--old-repeat 1] [--random-seeds 0 1] [--n-random 100000]
      [--baseline-seeds 0 1 2 3 4 5 6 7] [--arx-repeat 3]
-     [--serial-repeat 3] [--heads 20000 10000]
+     [--serial-repeat 3] [--generic-repeat 3] [--heads 20000 10000]
 (``--old-repeat 0``: the long-record path alone; ``--serial-repeat``
 adds rows of the long-record path on one thread, `_long.WORKERS` = 1;
-``--heads`` rows with the search on other numbers of leading samples,
-`_long.LONG_HEAD`.)
+``--generic-repeat`` rows with the simulation kernels for any orders,
+as before the kernels compiled for the orders of a long record
+(`_predictor.SPECIALIZE_FROM`); ``--heads`` rows with the search on other
+numbers of leading samples, `_long.LONG_HEAD`. The timings are medians
+of the repeats: the first run of a set of orders on a machine also
+compiles its kernels, about 4 s, which numba's cache then keeps.)
 """
 
 import argparse
@@ -47,22 +51,24 @@ import sandwichctl as sw                                   # noqa: E402
 from sandwichctl.identification import _long, _predictor  # noqa: E402
 from _timing import median_time, print_table               # noqa: E402
 
-KERNELS = ('_output_padded', 'oe_simulate', 'sp_simulate')
 TARGET = 5.0                    # seconds at N = 1e6
 
 
 class Counter:
     """Counts the samples each simulation kernel of `_predictor` runs
-    over (its padded input is the third argument)."""
+    over (the kernel `_predictor._kernel` chooses: compiled for the
+    orders, or for any; its padded input is the third argument)."""
 
     def __init__(self, n):
         self.n, self.full, self.samples = n, 0, 0
 
     @contextlib.contextmanager
     def counting(self):
-        saved = {name: getattr(_predictor, name) for name in KERNELS}
+        choose = _predictor._kernel
 
-        def wrap(kernel):
+        def chosen(o, kind, n, *rings):
+            kernel = choose(o, kind, n, *rings)
+
             def counted(theta, o, u, *args):
                 size = u.size - _predictor.padding(o)
                 self.samples += size
@@ -70,26 +76,27 @@ class Counter:
                 return kernel(theta, o, u, *args)
             return counted
 
-        for name, kernel in saved.items():
-            setattr(_predictor, name, wrap(kernel))
+        _predictor._kernel = chosen
         try:
             yield self
         finally:
-            for name, kernel in saved.items():
-                setattr(_predictor, name, kernel)
+            _predictor._kernel = choose
 
 
 @contextlib.contextmanager
-def path(long, threshold=None, arx=False, serial=False, head=None):
+def path(long, threshold=None, arx=False, serial=False, head=None,
+         generic=False):
     """The long-record path (at `threshold`, default the library's) or
     the exhaustive search (``long=False``); with `arx`, the long-record
     path's baseline of all the samples from the ARX start (as before it
     started from the leading samples' fit); with `serial`, on one thread
     (`_long.WORKERS` = 1); with `head`, the search on that many leading
-    samples (`_long.LONG_HEAD`)."""
+    samples (`_long.LONG_HEAD`); with `generic`, the simulation kernels for
+    any orders on every record (`_predictor.SPECIALIZE_FROM` = inf, as
+    before the kernels compiled for the orders)."""
     saved, carried, workers = (_long.LONG_RECORD, _long._carried_linear,
                                _long.WORKERS)
-    saved_head = _long.LONG_HEAD
+    saved_head, saved_from = _long.LONG_HEAD, _predictor.SPECIALIZE_FROM
     _long.LONG_RECORD = (threshold or saved) if long else np.inf
     if head:
         _long.LONG_HEAD = head
@@ -97,11 +104,14 @@ def path(long, threshold=None, arx=False, serial=False, head=None):
         _long._carried_linear = lambda *args: None
     if serial:
         _long.WORKERS = 1
+    if generic:
+        _predictor.SPECIALIZE_FROM = np.inf
     try:
         yield
     finally:
         _long.LONG_RECORD, _long._carried_linear = saved, carried
         _long.WORKERS, _long.LONG_HEAD = workers, saved_head
+        _predictor.SPECIALIZE_FROM = saved_from
 
 
 def identify(u, y, orders):
@@ -128,20 +138,20 @@ def measure(u, y, plant, repeat, **kw):
 def rows_of(label, u, y, plant, args, threshold=None):
     """The table rows of one record, a row per path asked for."""
     out = []
-    for name, long, arx, serial, head, repeat in (
-            [('long-record', True, False, False, None, args.repeat),
-             ('long, one thread', True, False, True, None,
-              args.serial_repeat),
-             ('long, ARX baseline', True, True, False, None,
-              args.arx_repeat)]
-            + [(f'long, head {h:,}', True, False, False, h, args.repeat)
+    for name, kw, repeat in (
+            [('long-record', {}, args.repeat),
+             ('long, any-order kernels', dict(generic=True),
+              args.generic_repeat),
+             ('long, one thread', dict(serial=True), args.serial_repeat),
+             ('long, ARX baseline', dict(arx=True), args.arx_repeat)]
+            + [(f'long, head {h:,}', dict(head=h), args.repeat)
                for h in args.heads]
-            + [('exhaustive', False, False, False, None, args.old_repeat)]):
+            + [('exhaustive', dict(long=False), args.old_repeat)]):
         if not repeat:
             continue
         t, full, lengths, res, err = measure(
-            u, y, plant, repeat, long=long, threshold=threshold, arx=arx,
-            serial=serial, head=head)
+            u, y, plant, repeat, **{'long': True, 'threshold': threshold,
+                                    **kw})
         taken = res.long_record is not None
         out.append([label, f'{u.size:,}', name, 'yes' if taken else 'no',
                     repeat, f'{t:.2f} s', full, f'{lengths:.1f}',
@@ -229,6 +239,9 @@ def main():
     ap.add_argument('--arx-repeat', type=int, default=0,
                     help="also run the long-record path with the baseline "
                     "of all the samples from the ARX start (before)")
+    ap.add_argument('--generic-repeat', type=int, default=0,
+                    help="also run the long-record path with the "
+                    "simulation kernels for any orders (before)")
     ap.add_argument('--serial-repeat', type=int, default=0,
                     help="also run the long-record path on one thread "
                     "(_long.WORKERS = 1)")

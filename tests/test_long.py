@@ -31,13 +31,16 @@ def _identify(monkeypatch, record, threshold, head=2000, **kw):
     monkeypatch.setattr(_long, 'LONG_RECORD', threshold)
     monkeypatch.setattr(_long, 'LONG_HEAD', head)
     calls = []
-    for name in ('_output_padded', 'oe_simulate', 'sp_simulate'):
-        kernel = getattr(_predictor, name)
+    choose = _predictor._kernel
 
-        def counted(theta, o, up, *args, kernel=kernel):
+    def chosen(o, kind, n, *rings):
+        kernel = choose(o, kind, n, *rings)
+
+        def counted(theta, o, up, *args):
             calls.append(up.size - _predictor.padding(o))
             return kernel(theta, o, up, *args)
-        monkeypatch.setattr(_predictor, name, counted)
+        return counted
+    monkeypatch.setattr(_predictor, '_kernel', chosen)
     res = sw.identify(u, y, **plant.orders, **kw)
     monkeypatch.undo()
     return res, sum(size >= N for size in calls)

@@ -31,6 +31,8 @@ At a switching point of eq. (2.2) both use the gradient of the zone that
 Clarke subgradient (Definition 3.1).
 """
 
+import threading
+
 import numba
 import numpy as np
 
@@ -176,13 +178,21 @@ def oe_steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1, past,
     ``parallel=False`` (series-parallel); then Sy has no recursion through
     L2's poles, but the L1 and backlash sensitivities stay exact.
     """
+    return _steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1, past,
+                  parallel, Sx.shape[0], Sv.shape[0])
+
+
+@numba.njit(cache=True, nogil=True)
+def _steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1, past, parallel,
+           rx_n, rv_n):
+    """`oe_steps`, its rings' sizes given: Sx and Sv may be rings whose
+    row t lives at t % rows (whole records need only the last few rows of
+    each; see `simulate_with_sensitivities`). A kernel compiled for given
+    orders (`_specialized`) passes them as constants."""
     na, nb, nc, nd, q1, q2 = o
     ia, im, ib, idd = _idx(o)
     m1, m2, D1, D2 = theta[im], theta[im + 1], theta[im + 2], theta[im + 3]
     p = theta.size
-    # Sx and Sv may be rings: row t lives at t % rows (whole records
-    # need only the last few rows of each; see `simulate_with_sensitivities`)
-    rx_n, rv_n = Sx.shape[0], Sv.shape[0]
     # x and v depend only on L1 and the backlash: theta[ia:idd] (a, m1,
     # m2, D1, D2, b). Their other sensitivity columns stay at the zeros
     # the caller's buffers hold, so only these are computed.
@@ -319,6 +329,70 @@ def _output_padded(theta, o, u, past, pad, xs, vs, ys, eps):
         ys[k] = l2_output(theta, o, vs, past, k)
 
 
+#: A record of at least this many samples (the search's head of a long
+#: record, `_long.LONG_HEAD`, and beyond) is simulated by kernels compiled
+#: for its orders (`_kernel`): the same recursion as `oe_simulate`,
+#: `sp_simulate` and `_output_padded`, whose loops then have constant
+#: bounds and whose rings are indexed by a mask, 3 to 4 times faster a
+#: sample (benchmarks/bench_long_records.py). Compiling the three takes
+#: about 4 s the first time for a set of orders on a machine (numba's
+#: cache keeps them); shorter records, and the grids of orders that
+#: `select_structure` tries on them, keep the kernels for any orders.
+SPECIALIZE_FROM = 50_000
+
+_KERNELS = {}
+_KERNELS_LOCK = threading.Lock()
+
+
+def ring_rows(o):
+    """Rows of the rings that hold x's and v's sensitivities: the power
+    of two at or above `padding(o)`."""
+    return 1 << (padding(o) - 1).bit_length()
+
+
+def _kernel(o, kind, n, *rings):
+    """The kernel of `kind`: 'oe' (`oe_simulate`), 'sp' (`sp_simulate`)
+    or 'output' (`_output_padded`), called as they are, for a record of
+    `n` samples whose sensitivity rings are `rings`: one compiled for the
+    orders `o` from `SPECIALIZE_FROM` samples on (rings of `ring_rows`),
+    else the one for any orders. The numbers are the same, bit for bit
+    (tests/test_predictor_kernels.py)."""
+    o = tuple(int(v) for v in o)
+    rows = ring_rows(o)
+    if n < SPECIALIZE_FROM or any(r.shape[0] != rows for r in rings):
+        return {'oe': oe_simulate, 'sp': sp_simulate,
+                'output': _output_padded}[kind]
+    with _KERNELS_LOCK:
+        kernel = _KERNELS.get((o, kind))
+        if kernel is None:
+            kernel = _KERNELS[(o, kind)] = _build(o, kind, rows)
+    return kernel
+
+
+def _build(o, kind, rows):
+    """A kernel of `kind` with the orders `o` and the rings' `rows` as
+    constants (numba takes closure variables as constants, and its cache
+    tells closures apart by their values); the orders passed in the call
+    are not read."""
+    if kind == 'output':
+        @numba.njit(cache=True, nogil=True)
+        def output(theta, _o, u, past, pad, xs, vs, ys, eps):
+            _output_padded(theta, o, u, past, pad, xs, vs, ys, eps)
+        return output
+    if kind == 'sp':
+        @numba.njit(cache=True, nogil=True)
+        def series(theta, _o, u, ymeas, pad, xs, vs, zs, ys, Sx, Sv, Sy):
+            _steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, pad, u.size,
+                   ymeas, False, rows, rows)
+        return series
+
+    @numba.njit(cache=True, nogil=True)
+    def parallel(theta, _o, u, pad, xs, vs, zs, ys, Sx, Sv, Sy):
+        _steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, pad, u.size, ys,
+               True, rows, rows)
+    return parallel
+
+
 def init_sizes(o):
     """How many past values of x, v and y make an initial condition.
 
@@ -390,8 +464,8 @@ def oe_signals(theta, o, u, init=None, ymeas=None, eps=0.0):
         past = np.zeros(pad + n)
         past[pad:] = ymeas
     _place_init(pad, init, xs, vs, ys, None if ymeas is None else past)
-    _output_padded(np.ascontiguousarray(theta, dtype=float), o, up, past,
-                   pad, xs, vs, ys, float(eps))
+    _kernel(o, 'output', n)(np.ascontiguousarray(theta, dtype=float), o,
+                            up, past, pad, xs, vs, ys, float(eps))
     return ys[pad:], xs[pad:], vs[pad:]
 
 
@@ -411,16 +485,18 @@ def simulate_with_sensitivities(theta, o, u, ymeas=None, init=None):
     zs = np.zeros(pad + n, dtype=np.int64)
     p = theta.size
     # only the output's sensitivities are returned; those of x and v are
-    # read a few samples back, so rings of `pad` rows hold them
-    Sx, Sv = np.zeros((pad, p)), np.zeros((pad, p))
+    # read a few samples back, so rings of at least `pad` rows hold them
+    Sx, Sv = np.zeros((ring_rows(o), p)), np.zeros((ring_rows(o), p))
     Sy = np.zeros((pad + n, p))
     theta = np.ascontiguousarray(theta, dtype=float)
     if ymeas is None:
         _place_init(pad, init, xs, vs, ys)
-        oe_simulate(theta, o, up, pad, xs, vs, zs, ys, Sx, Sv, Sy)
+        _kernel(o, 'oe', n, Sx, Sv)(theta, o, up, pad, xs, vs, zs, ys, Sx,
+                                    Sv, Sy)
     else:
         yp = np.zeros(pad + n)
         yp[pad:] = ymeas
         _place_init(pad, init, xs, vs, ys, yp)
-        sp_simulate(theta, o, up, yp, pad, xs, vs, zs, ys, Sx, Sv, Sy)
+        _kernel(o, 'sp', n, Sx, Sv)(theta, o, up, yp, pad, xs, vs, zs, ys,
+                                    Sx, Sv, Sy)
     return ys[pad:], Sy[pad:], zs[pad:]
