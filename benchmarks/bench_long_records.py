@@ -29,9 +29,10 @@ Run: python benchmarks/bench_long_records.py [--seeds 3] [--repeat 3]
      [--serial-repeat 3] [--generic-repeat 3] [--heads 20000 10000]
 (``--old-repeat 0``: the long-record path alone; ``--serial-repeat``
 adds rows of the long-record path on one thread, `_long.WORKERS` = 1;
-``--generic-repeat`` rows with the simulation kernels for any orders,
-as before the kernels compiled for the orders of a long record
-(`_predictor.SPECIALIZE_FROM`); ``--heads`` rows with the search on other
+``--generic-repeat`` rows with the simulation kernels for any orders
+and the linear fits' normal equations from their Jacobian, as before the
+kernels compiled for the orders and the lagged correlations of a long
+record (`_predictor.SPECIALIZE_FROM`); ``--heads`` rows with the search on other
 numbers of leading samples, `_long.LONG_HEAD`. The timings are medians
 of the repeats: the first run of a set of orders on a machine also
 compiles its kernels, about 4 s, which numba's cache then keeps.)
@@ -92,8 +93,9 @@ def path(long, threshold=None, arx=False, serial=False, head=None,
     started from the leading samples' fit); with `serial`, on one thread
     (`_long.WORKERS` = 1); with `head`, the search on that many leading
     samples (`_long.LONG_HEAD`); with `generic`, the simulation kernels for
-    any orders on every record (`_predictor.SPECIALIZE_FROM` = inf, as
-    before the kernels compiled for the orders)."""
+    any orders and the linear fits' Jacobian on every record
+    (`_predictor.SPECIALIZE_FROM` = inf, as before the kernels compiled
+    for the orders and `_linear._lagged_normal`)."""
     saved, carried, workers = (_long.LONG_RECORD, _long._carried_linear,
                                _long.WORKERS)
     saved_head, saved_from = _long.LONG_HEAD, _predictor.SPECIALIZE_FROM

@@ -311,3 +311,30 @@ def test_bad_input(kwargs, exc, match):
     args.update(kwargs)
     with pytest.raises(exc, match=match):
         identify_linear(**args)
+
+
+@pytest.mark.parametrize('shape, offsets, sizes', [
+    ((5, 6, 2), False, [3000]),
+    ((2, 1, 0), True, [1500, 5, 2000]),      # an experiment shorter than a delay
+    ((1, 0, 1), True, [400]),
+    ((3, 2, 4), True, [2, 900])])
+def test_lagged_normal_equations_equal_the_jacobians(shape, offsets, sizes):
+    """Long records form the normal equations from lagged correlations of
+    the filtered signals (`_lagged_normal`), not from the Jacobian: the
+    same J'J, J'r and column norms to rounding, centred per experiment
+    with `offsets`."""
+    from sandwichctl.identification import _linear
+    rng = np.random.default_rng(sum(sizes))
+    nb, m, nk = shape
+    v = [rng.normal(0.3, 1, n) for n in sizes]
+    ys = [rng.normal(0.5, 1, n) for n in sizes]
+    fp = np.r_[1.0, rng.uniform(-0.3, 0.3, m)]
+    b = rng.normal(0, 1, nb)
+    prob = _linear._OutputError(v, ys, shape, 0, offsets)
+    yhat = np.concatenate([rng.normal(0, 1, n) for n in sizes])
+    jac = prob.centre(_linear._jacobian(b, fp, prob.v, yhat, nk))
+    ref = _linear._normal(jac, prob.centre(prob.y - yhat))
+    new = _linear._lagged_normal(b, fp, prob.v, yhat, prob.y - yhat, nk,
+                                 offsets=offsets)
+    for got, want in zip(new, ref):
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-13)

@@ -15,6 +15,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.signal import lfilter
 
+from . import _predictor
 from ._problem import integrator_poly
 
 __all__ = []
@@ -188,10 +189,57 @@ def _jacobian(b, fp, v, yhat, nk):
 def _normal(jac, r):
     """Column-scaled normal equations: J'J / dd', J'r / d and d = |J_:j|
     (from the diagonal of J'J)."""
-    a = jac.T @ jac
+    return _scaled(jac.T @ jac, jac.T @ r)
+
+
+def _scaled(a, g):
+    """J'J and J'r scaled by d = |J_:j| (from the diagonal of J'J)."""
     d = np.sqrt(np.maximum(np.diag(a), 0.0))
     d = np.maximum(d, 1e-12 * max(d.max(), 1e-300))
-    return a / np.outer(d, d), (jac.T @ r) / d, d
+    return a / np.outer(d, d), g / d, d
+
+
+def _lagged_normal(b, fp, v, yhat, r, nk, *, offsets):
+    """`_normal` of the centred `_jacobian` and residual r, without the
+    Jacobian: its columns are delayed copies of two filtered signals, so
+    each product is a correlation of the two at one lag (a dot product,
+    shared by every pair of columns at that lag) less the few samples that
+    the later column's zero start leaves out. On a million samples this
+    reads three signals some 30 times instead of writing and reading a
+    matrix of a column per parameter (78 to 25 ms an iteration on 11
+    parameters). The same numbers to rounding, summed in another order."""
+    segs = _segs(v)
+    nb, m = b.size, fp.size - 1
+    shift = np.r_[nk + np.arange(nb), 1 + np.arange(m)].astype(int)
+    which = [0] * nb + [1] * m         # u or -y filtered
+    p = nb + m
+    a, g = np.zeros((p, p)), np.zeros(p)
+    parts = zip(_split(_filt([1.0], fp, segs), segs),
+                _split(-_filt([1.0], fp, _split(yhat, segs)), segs),
+                _split(r, segs))
+    for uf, yf, rr in parts:
+        x, n = (uf, yf), uf.size
+        lag = {}
+        for i in range(p):
+            for j in range(i, p):
+                c1, c2 = (i, j) if shift[i] <= shift[j] else (j, i)
+                s1, s2 = shift[c1], shift[c2]
+                if s2 >= n:
+                    continue
+                x1, x2, d = x[which[c1]], x[which[c2]], s2 - s1
+                key = (which[c1], which[c2], d)
+                if key not in lag:
+                    lag[key] = x1[d:] @ x2[:n - d]
+                a[i, j] += lag[key] - x1[n - s1:] @ x2[n - s2:n - d]
+            if shift[i] < n:
+                g[i] += x[which[i]][:n - shift[i]] @ rr[shift[i]:]
+        if offsets and n:
+            mu = np.array([x[which[i]][:max(n - shift[i], 0)].sum() / n
+                           for i in range(p)])
+            a -= n * np.triu(np.outer(mu, mu))
+            g -= mu * rr.sum()
+    a = np.triu(a) + np.triu(a, 1).T
+    return _scaled(a, g)
 
 
 def _start(v, y, nb, m, nk, offsets=False):
@@ -288,6 +336,9 @@ class _OutputError:
         return _cost(self.centre(self.y - yhat), 0.0)
 
     def normal(self, b, fp, yhat):
+        if self.y.size >= _predictor.SPECIALIZE_FROM:
+            return _lagged_normal(b, fp, self.v, yhat, self.y - yhat,
+                                  self.nk, offsets=self.offsets)
         return _normal(self.centre(_jacobian(b, fp, self.v, yhat, self.nk)),
                        self.centre(self.y - yhat))
 

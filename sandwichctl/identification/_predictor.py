@@ -337,7 +337,9 @@ def _output_padded(theta, o, u, past, pad, xs, vs, ys, eps):
 #: sample (benchmarks/bench_long_records.py). Compiling the three takes
 #: about 4 s the first time for a set of orders on a machine (numba's
 #: cache keeps them); shorter records, and the grids of orders that
-#: `select_structure` tries on them, keep the kernels for any orders.
+#: `select_structure` tries on them, keep the kernels for any orders. The
+#: linear fits switch to their lagged normal equations at the same length
+#: (`_linear._lagged_normal`).
 SPECIALIZE_FROM = 50_000
 
 _KERNELS = {}
