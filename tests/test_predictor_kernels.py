@@ -1,6 +1,8 @@
 """The kernels compiled for given orders (`_predictor._kernel`, used on
 long records) give the numbers of the kernels for any orders, bit for
-bit, so a long record's model does not depend on which ran."""
+bit, so a long record's model does not depend on which ran: they are
+compiled on a thread of their own, and the kernels for any orders run
+until they are ready."""
 
 import numpy as np
 import pytest
@@ -35,11 +37,19 @@ def test_compiled_for_the_orders_equals_any_orders(monkeypatch, rng, o):
         monkeypatch.setattr(pr, 'SPECIALIZE_FROM', 10 ** 9)
         generic = _all_signals(theta, o, u, ym, start)
         monkeypatch.setattr(pr, 'SPECIALIZE_FROM', 100)
-        assert pr._kernel(o, 'oe', u.size) is not pr.oe_simulate
+        ring = np.zeros((pr.ring_rows(o), theta.size))
+        for kind in ('oe', 'sp', 'output'):    # compiled on their thread
+            pr._kernel(o, kind, u.size, ring, ring)
+        pr.wait_for_kernels()
+        assert pr._kernel(o, 'oe', u.size, ring, ring) is not pr.oe_simulate
         compiled = _all_signals(theta, o, u, ym, start)
         assert set(np.unique(generic[2])) == {-1, 0, 1}  # every zone met
         for a, b in zip(generic, compiled):
             np.testing.assert_array_equal(a, b)
+        # compiled once, on their thread, for the types the callers pass
+        for kind in ('oe', 'sp', 'output'):
+            kernel = pr._kernel(o, kind, u.size, ring, ring)
+            assert len(kernel.signatures) == 1, kind
 
 
 def test_kernel_choice(monkeypatch):
@@ -55,6 +65,8 @@ def test_kernel_choice(monkeypatch):
     # whole-record arrays (the recursive estimators' layout) or rings of
     # another size are not indexed by a mask: the kernel for any orders
     assert pr._kernel(o, 'oe', n, other, other) is pr.oe_simulate
+    pr._kernel(np.array(o), 'oe', n, ring, ring)
+    pr.wait_for_kernels()
     compiled = pr._kernel(np.array(o), 'oe', n, ring, ring)
     assert compiled is not pr.oe_simulate
     assert pr._kernel(list(o), 'oe', n, ring, ring) is compiled   # kept

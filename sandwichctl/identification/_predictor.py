@@ -32,6 +32,7 @@ Clarke subgradient (Definition 3.1).
 """
 
 import threading
+from concurrent.futures import ThreadPoolExecutor
 
 import numba
 import numpy as np
@@ -336,14 +337,16 @@ def _output_padded(theta, o, u, past, pad, xs, vs, ys, eps):
 #: bounds and whose rings are indexed by a mask, 3 to 4 times faster a
 #: sample (benchmarks/bench_long_records.py). Compiling the three takes
 #: about 4 s the first time for a set of orders on a machine (numba's
-#: cache keeps them); shorter records, and the grids of orders that
-#: `select_structure` tries on them, keep the kernels for any orders. The
-#: linear fits switch to their lagged normal equations at the same length
-#: (`_linear._lagged_normal`).
+#: cache keeps them); they are compiled on a thread of their own while the
+#: kernels for any orders run. Shorter records, and the grids of orders
+#: that `select_structure` tries on them, keep the kernels for any orders.
+#: The linear fits switch to their lagged normal equations at the same
+#: length (`_linear._lagged_normal`).
 SPECIALIZE_FROM = 50_000
 
-_KERNELS = {}
+_KERNELS = {}           # (orders, kind): the Future of its compiled kernel
 _KERNELS_LOCK = threading.Lock()
+_COMPILER = []          # the compiling thread's executor, made on first use
 
 
 def ring_rows(o):
@@ -356,18 +359,58 @@ def _kernel(o, kind, n, *rings):
     """The kernel of `kind`: 'oe' (`oe_simulate`), 'sp' (`sp_simulate`)
     or 'output' (`_output_padded`), called as they are, for a record of
     `n` samples whose sensitivity rings are `rings`: one compiled for the
-    orders `o` from `SPECIALIZE_FROM` samples on (rings of `ring_rows`),
-    else the one for any orders. The numbers are the same, bit for bit
-    (tests/test_predictor_kernels.py)."""
+    orders `o` from `SPECIALIZE_FROM` samples on (rings of `ring_rows`)
+    once its compilation, started by the first such call, is done; else
+    the one for any orders. The numbers are the same, bit for bit
+    (tests/test_predictor_kernels.py), so which one runs changes only the
+    time."""
     o = tuple(int(v) for v in o)
     rows = ring_rows(o)
     if n < SPECIALIZE_FROM or any(r.shape[0] != rows for r in rings):
-        return {'oe': oe_simulate, 'sp': sp_simulate,
-                'output': _output_padded}[kind]
+        return _any_orders(kind)
     with _KERNELS_LOCK:
-        kernel = _KERNELS.get((o, kind))
-        if kernel is None:
-            kernel = _KERNELS[(o, kind)] = _build(o, kind, rows)
+        job = _KERNELS.get((o, kind))
+        if job is None:
+            if not _COMPILER:
+                _COMPILER.append(ThreadPoolExecutor(
+                    max_workers=1, thread_name_prefix='sandwichctl-kernels'))
+            job = _KERNELS[(o, kind)] = _COMPILER[0].submit(
+                _compiled, o, kind, rows)
+    return job.result() if job.done() else _any_orders(kind)
+
+
+def _any_orders(kind):
+    """The kernel of `kind` for any orders."""
+    return {'oe': oe_simulate, 'sp': sp_simulate,
+            'output': _output_padded}[kind]
+
+
+def wait_for_kernels():
+    """Wait until every kernel `_kernel` has started to compile is
+    compiled (tests and timings that want them all)."""
+    with _KERNELS_LOCK:
+        jobs = list(_KERNELS.values())
+    for job in jobs:
+        job.result()
+
+
+def _compiled(o, kind, rows):
+    """`_build`'s kernel, compiled by a call on an empty record of the
+    types the callers pass."""
+    kernel = _build(o, kind, rows)
+    pad, p = padding(o), sum(o[:4]) + 4
+    theta, u, xs, vs, ys = (np.zeros(p), np.zeros(pad), np.zeros(pad),
+                            np.zeros(pad), np.zeros(pad))
+    if kind == 'output':
+        kernel(theta, o, u, ys, pad, xs, vs, ys, 0.0)
+        return kernel
+    zs, ring, Sy = (np.zeros(pad, dtype=np.int64), np.zeros((rows, p)),
+                    np.zeros((pad, p)))
+    if kind == 'sp':
+        kernel(theta, o, u, np.zeros(pad), pad, xs, vs, zs, ys, ring,
+               ring.copy(), Sy)
+    else:
+        kernel(theta, o, u, pad, xs, vs, zs, ys, ring, ring.copy(), Sy)
     return kernel
 
 
