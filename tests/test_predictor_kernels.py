@@ -70,3 +70,34 @@ def test_kernel_choice(monkeypatch):
     compiled = pr._kernel(np.array(o), 'oe', n, ring, ring)
     assert compiled is not pr.oe_simulate
     assert pr._kernel(list(o), 'oe', n, ring, ring) is compiled   # kept
+
+
+def _child(o, queue):
+    """In a forked child: compile the kernels of other orders and run
+    them (numba's compiler lock must not be held by a thread the fork did
+    not copy)."""
+    theta = np.r_[0.1, 0.2, 0.1, 1.0, 1.2, 0.1, 0.2, 0.3, -0.2]
+    u = np.random.default_rng(1).normal(0, 1, 300)
+    ring = np.zeros((pr.ring_rows(o), theta.size))
+    pr._kernel(o, 'oe', u.size, ring, ring)
+    pr.wait_for_kernels()
+    kernel = pr._kernel(o, 'oe', u.size, ring, ring)
+    queue.put((kernel is not pr.oe_simulate,
+               float(pr.simulate_with_sensitivities(theta, o, u)[0][-1])))
+
+
+def test_fork_while_compiling(monkeypatch):
+    """A fork waits for a compilation under way (`os.register_at_fork`),
+    and the child compiles on a thread of its own."""
+    import multiprocessing
+    monkeypatch.setattr(pr, 'SPECIALIZE_FROM', 100)
+    o_parent, o_child = (2, 1, 1, 1, 1, 0), (1, 1, 2, 1, 0, 0)
+    ring = np.zeros((pr.ring_rows(o_parent), 10))
+    pr._kernel(o_parent, 'sp', 300, ring, ring)     # compiling on its thread
+    ctx = multiprocessing.get_context('fork')
+    queue = ctx.Queue()
+    child = ctx.Process(target=_child, args=(o_child, queue))
+    child.start()
+    compiled, last = queue.get(timeout=300)
+    child.join(timeout=60)
+    assert child.exitcode == 0 and compiled and np.isfinite(last)

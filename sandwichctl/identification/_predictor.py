@@ -31,8 +31,9 @@ At a switching point of eq. (2.2) both use the gradient of the zone that
 Clarke subgradient (Definition 3.1).
 """
 
+import os
 import threading
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, wait
 
 import numba
 import numpy as np
@@ -58,7 +59,7 @@ def padding(o):
     return q1 + nb + q2 + nd + na + nc + 2
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, inline='always')
 def l1_output(theta, o, u, xs, t):
     """x_hat(t) of eq. (2.1) with stored past x_hat (xs) and input u."""
     na, nb, q1 = o[0], o[1], o[4]
@@ -363,7 +364,7 @@ def _kernel(o, kind, n, *rings):
     once its compilation, started by the first such call, is done; else
     the one for any orders. The numbers are the same, bit for bit
     (tests/test_predictor_kernels.py), so which one runs changes only the
-    time."""
+    time (and a compilation that failed leaves the one for any orders)."""
     o = tuple(int(v) for v in o)
     rows = ring_rows(o)
     if n < SPECIALIZE_FROM or any(r.shape[0] != rows for r in rings):
@@ -376,7 +377,29 @@ def _kernel(o, kind, n, *rings):
                     max_workers=1, thread_name_prefix='sandwichctl-kernels'))
             job = _KERNELS[(o, kind)] = _COMPILER[0].submit(
                 _compiled, o, kind, rows)
-    return job.result() if job.done() else _any_orders(kind)
+    if job.done() and job.exception() is None:
+        return job.result()
+    return _any_orders(kind)
+
+
+def wait_for_kernels():
+    """Wait until every kernel `_kernel` has started to compile is
+    compiled or has failed (tests and timings that want them all; and
+    before a fork, which must not copy numba's compiler lock while the
+    compiling thread holds it)."""
+    with _KERNELS_LOCK:
+        jobs = list(_KERNELS.values())
+    wait(jobs)
+
+
+def _forked():
+    """In a forked child: the compiling thread was not copied, so a new
+    one is made on the next compilation."""
+    _COMPILER.clear()
+
+
+if hasattr(os, 'register_at_fork'):
+    os.register_at_fork(before=wait_for_kernels, after_in_child=_forked)
 
 
 def _any_orders(kind):
@@ -414,28 +437,47 @@ def _compiled(o, kind, rows):
     return kernel
 
 
+#: Copies of the recursions without numba's cache, for the kernels of
+#: `_build`: those compile them for their orders as literal types, and a
+#: cached overload for each set of orders would share one cache index that
+#: processes compiling other orders at once could mix up.
+_steps_for_orders = numba.njit(nogil=True)(_steps.py_func)
+_output_for_orders = numba.njit(nogil=True)(_output_padded.py_func)
+
+
 def _build(o, kind, rows):
     """A kernel of `kind` with the orders `o` and the rings' `rows` as
-    constants (numba takes closure variables as constants, and its cache
-    tells closures apart by their values); the orders passed in the call
-    are not read."""
+    constants (numba takes closure variables as constants); the orders
+    passed in the call are not read. Each set of orders has a cache file
+    of its own (`_jit_for`)."""
     if kind == 'output':
-        @numba.njit(cache=True, nogil=True)
+        @_jit_for(o, rows)
         def output(theta, _o, u, past, pad, xs, vs, ys, eps):
-            _output_padded(theta, o, u, past, pad, xs, vs, ys, eps)
+            _output_for_orders(theta, o, u, past, pad, xs, vs, ys, eps)
         return output
     if kind == 'sp':
-        @numba.njit(cache=True, nogil=True)
+        @_jit_for(o, rows)
         def series(theta, _o, u, ymeas, pad, xs, vs, zs, ys, Sx, Sv, Sy):
-            _steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, pad, u.size,
-                   ymeas, False, rows, rows)
+            _steps_for_orders(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, pad,
+                              u.size, ymeas, False, rows, rows)
         return series
 
-    @numba.njit(cache=True, nogil=True)
+    @_jit_for(o, rows)
     def parallel(theta, _o, u, pad, xs, vs, zs, ys, Sx, Sv, Sy):
-        _steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, pad, u.size, ys,
-               True, rows, rows)
+        _steps_for_orders(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, pad,
+                          u.size, ys, True, rows, rows)
     return parallel
+
+
+def _jit_for(o, rows):
+    """numba.njit with its cache in files named after the orders and rows:
+    numba names a cache after the function and updates its index without a
+    lock, so kernels of other orders that processes compile at once must
+    not share one."""
+    def jit(func):
+        func.__qualname__ += '_' + '_'.join(str(v) for v in o + (rows,))
+        return numba.njit(cache=True, nogil=True)(func)
+    return jit
 
 
 def init_sizes(o):
