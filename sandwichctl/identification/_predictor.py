@@ -190,7 +190,7 @@ def _steps(theta, o, u, xs, vs, zs, ys, Sx, Sv, Sy, k0, k1, past, parallel,
     """`oe_steps`, its rings' sizes given: Sx and Sv may be rings whose
     row t lives at t % rows (whole records need only the last few rows of
     each; see `simulate_with_sensitivities`). A kernel compiled for given
-    orders (`_specialized`) passes them as constants."""
+    orders (`_build`) passes them as constants."""
     na, nb, nc, nd, q1, q2 = o
     ia, im, ib, idd = _idx(o)
     m1, m2, D1, D2 = theta[im], theta[im + 1], theta[im + 2], theta[im + 3]
