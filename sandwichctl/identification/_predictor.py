@@ -408,15 +408,6 @@ def _any_orders(kind):
             'output': _output_padded}[kind]
 
 
-def wait_for_kernels():
-    """Wait until every kernel `_kernel` has started to compile is
-    compiled (tests and timings that want them all)."""
-    with _KERNELS_LOCK:
-        jobs = list(_KERNELS.values())
-    for job in jobs:
-        job.result()
-
-
 def _compiled(o, kind, rows):
     """`_build`'s kernel, compiled by a call on an empty record of the
     types the callers pass."""
@@ -573,7 +564,8 @@ def simulate_with_sensitivities(theta, o, u, ymeas=None, init=None):
     p = theta.size
     # only the output's sensitivities are returned; those of x and v are
     # read a few samples back, so rings of at least `pad` rows hold them
-    Sx, Sv = np.zeros((ring_rows(o), p)), np.zeros((ring_rows(o), p))
+    rows = ring_rows(o)
+    Sx, Sv = np.zeros((rows, p)), np.zeros((rows, p))
     Sy = np.zeros((pad + n, p))
     theta = np.ascontiguousarray(theta, dtype=float)
     if ymeas is None:
