@@ -27,13 +27,17 @@ Run: python benchmarks/bench_long_records.py [--seeds 3] [--repeat 3]
      [--old-repeat 1] [--random-seeds 0 1] [--n-random 100000]
      [--baseline-seeds 0 1 2 3 4 5 6 7] [--arx-repeat 3]
      [--serial-repeat 3] [--generic-repeat 3] [--heads 20000 10000]
+     [--whole-path-repeat 3]
 (``--old-repeat 0``: the long-record path alone; ``--serial-repeat``
 adds rows of the long-record path on one thread, `_long.WORKERS` = 1;
 ``--generic-repeat`` rows with the simulation kernels for any orders
 and the linear fits' normal equations from their Jacobian, as before the
 kernels compiled for the orders and the lagged correlations of a long
 record (`_predictor.SPECIALIZE_FROM`); ``--heads`` rows with the search on other
-numbers of leading samples, `_long.LONG_HEAD`. The timings are medians
+numbers of leading samples, `_long.LONG_HEAD`; ``--whole-path-repeat``
+rows with stage 1's smoothed path (step 8) on all the leading samples
+instead of the first `_long.PATH_SAMPLES` of them, as before
+2026-11-27. The timings are medians
 of the repeats: the first run of a set of orders on a machine also
 compiles its kernels, about 4 s, which numba's cache then keeps.)
 """
@@ -86,7 +90,7 @@ class Counter:
 
 @contextlib.contextmanager
 def path(long, threshold=None, arx=False, serial=False, head=None,
-         generic=False):
+         generic=False, whole_path=False):
     """The long-record path (at `threshold`, default the library's) or
     the exhaustive search (``long=False``); with `arx`, the long-record
     path's baseline of all the samples from the ARX start (as before it
@@ -95,10 +99,15 @@ def path(long, threshold=None, arx=False, serial=False, head=None,
     samples (`_long.LONG_HEAD`); with `generic`, the simulation kernels for
     any orders and the linear fits' Jacobian on every record
     (`_predictor.SPECIALIZE_FROM` = inf, as before the kernels compiled
-    for the orders and `_linear._lagged_normal`)."""
+    for the orders and `_linear._lagged_normal`); with `whole_path`,
+    stage 1's smoothed path on all its samples (`_long.PATH_SAMPLES` =
+    None)."""
     saved, carried, workers = (_long.LONG_RECORD, _long._carried_linear,
                                _long.WORKERS)
     saved_head, saved_from = _long.LONG_HEAD, _predictor.SPECIALIZE_FROM
+    saved_path = _long.PATH_SAMPLES
+    if whole_path:
+        _long.PATH_SAMPLES = None
     _long.LONG_RECORD = (threshold or saved) if long else np.inf
     if head:
         _long.LONG_HEAD = head
@@ -114,6 +123,7 @@ def path(long, threshold=None, arx=False, serial=False, head=None,
         _long.LONG_RECORD, _long._carried_linear = saved, carried
         _long.WORKERS, _long.LONG_HEAD = workers, saved_head
         _predictor.SPECIALIZE_FROM = saved_from
+        _long.PATH_SAMPLES = saved_path
 
 
 def identify(u, y, orders):
@@ -145,7 +155,9 @@ def rows_of(label, u, y, plant, args, threshold=None):
              ('long, any-order kernels', dict(generic=True),
               args.generic_repeat),
              ('long, one thread', dict(serial=True), args.serial_repeat),
-             ('long, ARX baseline', dict(arx=True), args.arx_repeat)]
+             ('long, ARX baseline', dict(arx=True), args.arx_repeat),
+             ('long, whole smoothed path', dict(whole_path=True),
+              args.whole_path_repeat)]
             + [(f'long, head {h:,}', dict(head=h), args.repeat)
                for h in args.heads]
             + [('exhaustive', dict(long=False), args.old_repeat)]):
@@ -247,6 +259,9 @@ def main():
     ap.add_argument('--serial-repeat', type=int, default=0,
                     help="also run the long-record path on one thread "
                     "(_long.WORKERS = 1)")
+    ap.add_argument('--whole-path-repeat', type=int, default=0,
+                    help="also run the long-record path with stage 1's "
+                    "smoothed path on all its samples (before)")
     ap.add_argument('--heads', type=int, nargs='*', default=[],
                     help="also run the long-record path with its search "
                     "on these many leading samples (_long.LONG_HEAD)")

@@ -221,3 +221,25 @@ def test_constant_leading_samples_search_the_whole_record(
     res = sw.identify(u, y, **plant.orders)
     assert res.long_record is None and "long record" not in res.message
     assert res.success
+
+
+def test_stage_1_smoothed_path_on_its_leading_samples(monkeypatch, record):
+    """Step 8's smoothed problems run on the first `PATH_SAMPLES` of stage
+    1's samples and its exact refinement on all of them; the exhaustive
+    search of a shorter record smooths on every sample."""
+    from sandwichctl.identification import _search
+    seen, smooth = [], _search.smooth_refine
+
+    def spy(st, phi, u, y, *args, path=None, **kw):
+        seen.append((sum(p.size for p in u), None if path is None else
+                     sum(p.size for p in path[0] + path[1])))
+        return smooth(st, phi, u, y, *args, path=path, **kw)
+    monkeypatch.setattr(_search, 'smooth_refine', spy)
+    monkeypatch.setattr(_long, 'PATH_SAMPLES', 800)
+    res, _ = _identify(monkeypatch, record, threshold=N // 2)
+    assert res.long_record is not None and seen
+    assert all(n == 2000 and both == 2 * 800 for n, both in seen)
+    monkeypatch.setattr(_search, 'smooth_refine', spy)
+    seen.clear()
+    _identify(monkeypatch, record, threshold=N)
+    assert seen and all(n == N and path is None for n, path in seen)

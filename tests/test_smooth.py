@@ -93,3 +93,17 @@ def test_identify_can_skip_the_smoothing_stage():
     assert res.options['smooth'] is False
     with pytest.raises(TypeError, match='smooth'):
         sw.identify(u, y, **plant.orders, smooth='yes')
+
+
+@pytest.mark.parametrize('seed', [3, 19])
+def test_the_path_on_leading_samples_then_the_exact_cost_on_all(seed):
+    """The smoothed problems on the leading third of the record (as a long
+    record's stage 1 runs them) still lead to the plant: the exact
+    refinement on every sample ends there."""
+    case, prob, truth, start = _case(seed)
+    st, u, y = prob.st, prob.u, prob.y
+    energy = 0.5 * float(y[0] @ y[0])
+    out = smooth_refine(st, start, u, y, path=([u[0][:500]], [y[0][:500]]))
+    assert out['cost'] < 1e-16 * energy
+    assert out['cost'] == pytest.approx(st.cost(out['phi'], u, y))
+    np.testing.assert_allclose(out['phi'], truth, atol=1e-7)

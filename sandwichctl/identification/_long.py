@@ -14,8 +14,9 @@ in two stages:
 1. the whole search (steps 1 to 13, the integrator decision, its block
    and the held-out check included) on the leading `LONG_HEAD` samples
    (each experiment in proportion to its length, from its own start, so
-   its initial conditions are the same); a backlash closed by the
-   held-out check stays closed;
+   its initial conditions are the same; step 8's smoothed path, only a
+   way to a start, on the first `PATH_SAMPLES` of them); a backlash
+   closed by the held-out check stays closed;
 2. on all the samples, with the integrators where stage 1 put them: the
    linear baseline of their count, from stage 1's linear fit (from the
    ARX start, the fit of a million samples took up to 104 iterations on
@@ -53,6 +54,12 @@ LONG_RECORD = 200_000
 #: times the 2,000 it screens on by default, five times the longest record
 #: the search was tuned on.
 LONG_HEAD = 50_000
+#: Leading samples of stage 1's smoothed path (step 8: a way to a start,
+#: which the exact cost then refines on all `LONG_HEAD`). Its finite
+#: difference Jacobians and their SVDs cost half of stage 1 on 50,000
+#: samples of random plants. On 20,000 stage 1 ends in the same basin or
+#: a better one (benchmarks/bench_long_records.py --whole-path-repeat).
+PATH_SAMPLES = 20_000
 #: Threads of the long-record path: stage 2's linear baseline beside
 #: stage 1, and in stage 1 the starts of step 6, the relocations of step
 #: 9 and the finite differences of step 8 side by side
@@ -80,7 +87,7 @@ def long_search(task):
     head = Task(_head(task.u, LONG_HEAD), _head(task.y, LONG_HEAD),
                 task.orders, task.opt, dt=task.dt, name=task.name,
                 progress=task.progress, offsets=task.offsets,
-                workers=workers)
+                workers=workers, path_samples=PATH_SAMPLES)
     if not all(np.ptp(part) > 0 for part in head.u + head.y):
         return search(task)       # a constant start: it cannot find a basin
     scaled_h, scaled = step1_units(head), step1_units(task)

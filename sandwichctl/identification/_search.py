@@ -1,5 +1,4 @@
-"""The output-error search of ``identify(method='oe')``, step by step
-(private).
+"""The output-error search of ``identify(method='oe')``, step by step.
 
 Each numbered step of docs/algorithm.md (``method="oe"``) is one function
 or method here, in that order and with that number:
@@ -17,7 +16,7 @@ or method here, in that order and with that number:
 The starts come from `_starts`, the solver is `_lm.lm`, the problem and
 its verdict from `_problem`. A new start is one function in `_starts` and
 one line in the step that uses it; the progress bar counts what the steps
-say they will run (`Search.planned`).
+say they will run (`Search.planned`). Private.
 """
 
 import dataclasses
@@ -79,6 +78,7 @@ class Task:
         self.progress = kw.get('progress', False)
         self.offsets = kw.get('offsets', False)
         self.workers = kw.get('workers', 1)     # threads of `ordered_map`
+        self.path_samples = kw.get('path_samples')  # of step 8's path
         self.inits = opt.initial_state == 'estimate'
         o = orders
         self.shape = (o['nb'] + o['nd'] + 1, o['na'] + o['nc'],
@@ -101,7 +101,7 @@ class Task:
         ys = [lfilter([1.0, -1.0], [1.0, -rho], part) for part in self.y]
         opt = dataclasses.replace(self.opt, relocate=0, hops=0)
         return Task(self.u, ys, self.orders, opt, dt=self.dt,
-                    workers=self.workers)
+                    workers=self.workers, path_samples=self.path_samples)
 
     def fit_linear(self, scaled, k, start=None, **kw):
         """The linear output-error fit with k integrators on `scaled`
@@ -303,9 +303,9 @@ def _head(parts, n):
 class Search:
     """The search with the integrators `split` = (i1, i2) in L1 and L2
     from the linear fit `lin` with i1 + i2 of them (steps 4 to 12); `run`
-    runs them. ``probs`` maps a gain sign to its
-    scaled `Problem`, ``heads`` to (parametrisation, u, y) of its leading
-    `screen_samples` samples, on which the screening runs."""
+    runs them. ``probs`` maps a gain sign to its scaled `Problem`,
+    ``heads`` to (parametrisation, u, y) of its leading `screen_samples`
+    samples, on which the screening runs."""
 
     def __init__(self, task, lin, split, probs=None):
         self.task, self.opt, self.lin = task, task.opt, lin
@@ -599,10 +599,11 @@ class Search:
         """Step 8: a path of smoothed costs from the best (continuous
         where the exact cost jumps), then the exact cost again."""
         if self.opt.smooth:
-            p = self.probs[best['sign']]
+            p, n = self.probs[best['sign']], self.task.path_samples
+            path = None if n is None else (_head(p.u, n), _head(p.y, n))
             out = smooth_refine(p.st, best['phi'], p.u, p.y,
                                 self.opt.max_iter, self.opt.tol,
-                                workers=self.task.workers)
+                                workers=self.task.workers, path=path)
             if out is not None and out['cost'] < best['cost']:
                 best = dict(out, sign=best['sign'])
         self.tick()

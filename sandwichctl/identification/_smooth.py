@@ -62,7 +62,8 @@ def _pool(workers):
         yield {'workers': pool.map}
 
 
-def smooth_refine(st, phi, u, y, max_iter=200, tol=1e-10, *, workers=1):
+def smooth_refine(st, phi, u, y, max_iter=200, tol=1e-10, *, workers=1,
+                  path=None):
     """The continuation from phi, then `lm` on the exact cost.
 
     Parameters
@@ -78,6 +79,10 @@ def smooth_refine(st, phi, u, y, max_iter=200, tol=1e-10, *, workers=1):
         Threads for the finite differences of the smoothed problems'
         Jacobians (the same evaluations, side by side; with scipy >= 1.16,
         whose ``least_squares`` takes ``workers``).
+    path : tuple of list of ndarray, optional
+        (u, y) of the smoothed problems, when they run on fewer samples
+        than the exact refinement (a long record's leading part, each
+        experiment from its start); by default `u` and `y`.
 
     Returns
     -------
@@ -86,6 +91,9 @@ def smooth_refine(st, phi, u, y, max_iter=200, tol=1e-10, *, workers=1):
         leaves the admissible set (a free denominator not strictly stable)
         or gives no finite values.
     """
+    exact = (u, y)
+    if path is not None:
+        u, y = path
     free = st.q + st.n_off
     lo = np.full(free, -np.inf)
     lo[st.im:st.im + 4] = 0.0
@@ -116,4 +124,4 @@ def smooth_refine(st, phi, u, y, max_iter=200, tol=1e-10, *, workers=1):
     start = st.clip(start, 1e-9)
     if not st.stable(start):
         return None
-    return lm(st, start, u, y, max_iter, tol)
+    return lm(st, start, *exact, max_iter, tol)
