@@ -94,22 +94,32 @@ def test_the_leading_samples_linear_fit_starts_that_of_all():
     np.testing.assert_array_equal(free, [1.0, -0.5, 0.06])
 
 
-def test_two_threads_give_the_one_threads_model(monkeypatch, record):
-    """Stage 2's baseline beside stage 1, the starts of step 6 and the
-    smoothed path's differences on threads: the same model and baseline
-    as on one thread, bit for bit."""
-    plant, u, y = record
+def _one_and_two_threads(monkeypatch, identify):
+    """{workers: identify()} on the long path with 1 and 2 threads, which
+    must give the same model and message, bit for bit."""
     monkeypatch.setattr(_long, 'LONG_RECORD', 3000)
     monkeypatch.setattr(_long, 'LONG_HEAD', 2000)
     monkeypatch.delenv('OMP_NUM_THREADS', raising=False)
     out = {}
     for workers in (1, 2):
         monkeypatch.setattr(_long, 'WORKERS', workers)
-        out[workers] = sw.identify(u, y, **plant.orders)
+        with warnings.catch_warnings():
+            warnings.simplefilter('ignore', RuntimeWarning)
+            out[workers] = identify()
     assert out[1].long_record is not None
     np.testing.assert_array_equal(out[2].theta, out[1].theta)
-    assert out[2].linear['cost'] == out[1].linear['cost']
     assert out[2].message == out[1].message
+    return out
+
+
+def test_two_threads_give_the_one_threads_model(monkeypatch, record):
+    """Stage 2's baseline beside stage 1, the starts of step 6 and the
+    smoothed path's differences on threads: the same model and baseline
+    as on one thread, bit for bit."""
+    plant, u, y = record
+    out = _one_and_two_threads(
+        monkeypatch, lambda: sw.identify(u, y, **plant.orders))
+    assert out[2].linear['cost'] == out[1].linear['cost']
 
 
 def test_a_set_stop_ends_the_linear_fit_before_its_next_iteration():
@@ -243,3 +253,16 @@ def test_stage_1_smoothed_path_on_its_leading_samples(monkeypatch, record):
     seen.clear()
     _identify(monkeypatch, record, threshold=N)
     assert seen and all(n == N and path is None for n, path in seen)
+
+
+def test_integrator_splits_side_by_side_give_the_one_threads_model(
+        monkeypatch):
+    """With integrators='auto' on integrating data stage 1 searches every
+    integrator split, on two threads side by side: the same model, verdict
+    and message as on one thread."""
+    from sandwichctl.data import random_case
+    case = random_case(105, n=4000, snr=100, integrating=True)
+    out = _one_and_two_threads(
+        monkeypatch, lambda: sw.identify(case.u, case.y, **case.orders))
+    assert "integrators='auto' chose" in out[1].message
+    assert out[2].integrators == out[1].integrators == {'L1': 1, 'L2': 0}

@@ -198,13 +198,13 @@ def test_relocations_leave_the_valley_of_a_wrong_l1_pole():
 
 
 def test_screening_uses_the_leading_samples_of_each_experiment():
-    from sandwichctl.identification._search import _head
+    from sandwichctl.identification._data import leading
     parts = [np.arange(3000.0), np.arange(1000.0)]
-    heads = _head(parts, 2000)
+    heads = leading(parts, 2000)
     assert [h.size for h in heads] == [1500, 500]
     np.testing.assert_array_equal(heads[1], parts[1][:500])
-    assert _head(parts, 5000) is parts
-    assert [h.size for h in _head([np.ones(5000), np.ones(10)], 100)] == [
+    assert leading(parts, 5000) is parts
+    assert [h.size for h in leading([np.ones(5000), np.ones(10)], 100)] == [
         100, 10]
 
 

@@ -103,3 +103,13 @@ def check_varying(name, parts, why):
     if np.ptp(x) <= 1e-14 * np.max(np.abs(x)):
         what = 'all zero' if not np.any(x) else f"all samples = {x[0]:.6g}"
         raise ValueError(f"{name} is constant ({what}); {why}")
+
+
+def leading(parts, n):
+    """The leading samples of the experiments, about n in all (each
+    experiment in proportion to its length, at least 50 samples)."""
+    total = sum(part.size for part in parts)
+    if total <= n:
+        return parts
+    return [part[:max(50, int(np.ceil(n * part.size / total)))]
+            for part in parts]

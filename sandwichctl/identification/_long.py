@@ -39,7 +39,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from ._search import (Search, Task, _head, search, step1_units,
+from ._data import leading
+from ._search import (Search, Task, search, step1_units,
                       step2_linear_baseline)
 
 __all__ = []
@@ -84,7 +85,7 @@ def long_search(task):
     """Stages 1 and 2 on `task`: (problem, best `lm` output, linear
     baseline), as `_search.search` returns them, on all the samples."""
     workers = threads()
-    head = Task(_head(task.u, LONG_HEAD), _head(task.y, LONG_HEAD),
+    head = Task(leading(task.u, LONG_HEAD), leading(task.y, LONG_HEAD),
                 task.orders, task.opt, dt=task.dt, name=task.name,
                 progress=task.progress, offsets=task.offsets,
                 workers=workers, path_samples=PATH_SAMPLES)

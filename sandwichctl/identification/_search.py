@@ -24,6 +24,7 @@ import dataclasses
 import numpy as np
 from scipy.signal import lfilter
 
+from ._data import leading
 from ._held_out import step13_held_out
 from ._lm import lm
 from ._linear import fit_oe, fit_output, fit_blocks, wants_integrator
@@ -186,7 +187,7 @@ def step3_integrators(task, linears):
     searches = {split: Search(task, lin, split)
                 for k, lin in linears.items()
                 for split in integrator_splits(k, task.orders, block)}
-    fits = {split: one.run() for split, one in searches.items()}
+    fits = _run_all(searches, task.workers)
     free = (0, 0)
     if free in fits and len(fits) > 1:
         cheapest = min((s for s in fits if s != free),
@@ -230,6 +231,15 @@ def step3_integrators(task, linears):
         if block == 'auto':             # where it went: the model's own
             best['message'] += text
     return prob, best, linear, searches[floor]
+
+
+def _run_all(searches, workers):
+    """{split: run} of `searches` on `workers` threads, an L2 integrator's
+    first (it adds step 5's filtered search): the same fits as on one."""
+    order = sorted(searches, key=lambda split: -split[1])
+    got = dict(zip(order, ordered_map(lambda split: searches[split].run(),
+                                      order, workers)))
+    return {split: got[split] for split in searches}
 
 
 #: a zero of the model this close to z = 1 cancels its integrator: the
@@ -290,16 +300,6 @@ def _unintegrated(task, free, integrating):
     return prob0, out, linear0
 
 
-def _head(parts, n):
-    """The leading samples of the experiments, about n in all (each
-    experiment in proportion to its length, at least 50 samples)."""
-    total = sum(part.size for part in parts)
-    if total <= n:
-        return parts
-    return [part[:max(50, int(np.ceil(n * part.size / total)))]
-            for part in parts]
-
-
 class Search:
     """The search with the integrators `split` = (i1, i2) in L1 and L2
     from the linear fit `lin` with i1 + i2 of them (steps 4 to 12); `run`
@@ -322,7 +322,7 @@ class Search:
 
     def _head_all(self):
         n = self.opt.screen_samples
-        self.heads = {s: (p.st, _head(p.u, n), _head(p.y, n))
+        self.heads = {s: (p.st, leading(p.u, n), leading(p.y, n))
                       for s, p in self.probs.items()}
 
     def run(self):
@@ -600,7 +600,7 @@ class Search:
         where the exact cost jumps), then the exact cost again."""
         if self.opt.smooth:
             p, n = self.probs[best['sign']], self.task.path_samples
-            path = None if n is None else (_head(p.u, n), _head(p.y, n))
+            path = None if n is None else (leading(p.u, n), leading(p.y, n))
             out = smooth_refine(p.st, best['phi'], p.u, p.y,
                                 self.opt.max_iter, self.opt.tol,
                                 workers=self.task.workers, path=path)
