@@ -1,15 +1,16 @@
 """Which linear model a sandwich's servo design is built on: the feedback
 on the result's linear baseline or on the sandwich's mbar L1 L2, the
-feedforward inverting the one or the other (`linear_part`), and the drift
-terms (a pole at z = 1 beside a zero) cancelled from a model first."""
+feedforward inverting the one or the other (`linear_part`), the drift
+terms (a pole at z = 1 beside a zero) cancelled from a model first, and
+the design's note on the linear feedforward (`ff_note`)."""
 
 import numpy as np
 import control as ct
 
 from ..model.sandwich import SandwichSystem
 from .inverse import _fmt_roots
-from ._servo_design import (RINGING, at_one, design_pid, low_frequency_sign,
-                            series_length, tf_arrays)
+from ._servo_design import (FF_ACTIVITY, RINGING, at_one, design_pid,
+                            low_frequency_sign, series_length, tf_arrays)
 
 
 #: the sandwich's linear part drives the feedforward of a non-integrating
@@ -186,3 +187,21 @@ def cancel_drift(model, notes):
     if isinstance(model, ct.TransferFunction) and model.issiso():
         return cancel(model, "a pole", "the zero")
     return model
+
+
+def ff_note(kind, preview, approx, linear_note, smooth, ratio):
+    """The design note on the linear feedforward."""
+    text = (f"feedforward: model inverse with {preview} samples of "
+            f"preview" + (" (ZPETC for zeros outside the unit circle)"
+                          if kind == 'zpetc' else ""))
+    if smooth:
+        text += (f", smoothed by a zero-phase Hann window of {2 * smooth + 1}"
+                 f" taps ({smooth} of the samples of preview): unsmoothed "
+                 f"it asks for {ratio:.3g} times the input activity of the "
+                 f"baseline's inverse (more than {FF_ACTIVITY:g})")
+    if approx:
+        text += (f"; zero(s) at {_fmt_roots(np.array(approx))} kept by "
+                 f"their DC gain only")
+    if linear_note:
+        text += f"; {linear_note}"
+    return text
