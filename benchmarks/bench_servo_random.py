@@ -16,9 +16,10 @@ with ``sw.identify`` (its true orders, defaults); each success gets
 and each design runs in closed loop on the true plant for
 ``sw.servo_reference(0.01, travel, hold=1.0)`` (the plant's sample read as
 10 ms), with the output's spread as the travel. It prints a row per
-design whose feedback the check moved to the sandwich's mbar L1 L2, and
-counts the designs refused (with their reasons) and those whose RMS error
-exceeds one travel.
+design whose feedback the check moved to the sandwich's mbar L1 L2 and a
+row per default design whose RMS error exceeds one travel, and counts the
+designs refused (with their reasons) and those whose RMS error exceeds
+one travel.
 
 Run: python benchmarks/bench_servo_random.py [--seeds 50] [--seed0 0]
 """
@@ -47,7 +48,7 @@ def rms_travels(plant, ctrl, r, travel):
     with np.errstate(all='ignore'), warnings.catch_warnings():
         warnings.simplefilter('ignore')
         y = sw.closed_loop_response(plant, r, ctrl).outputs[0]
-    err = float(np.sqrt(np.mean((r - y) ** 2))) / travel
+        err = float(np.sqrt(np.mean((r - y) ** 2))) / travel
     return err if np.isfinite(err) else np.inf
 
 
@@ -59,13 +60,23 @@ def design(model, **kw):
         return None, str(exc)
 
 
+def _source(ctrl, res):
+    """What the design's feedback was designed on: the baseline where its
+    gains are those of the design forced onto it."""
+    base, _ = design(res, feedback_from='baseline')
+    same = base is not None and (base.kp, base.ki, base.kd) == (
+        ctrl.kp, ctrl.ki, ctrl.kd)
+    return 'baseline' if same else 'mbar L1 L2'
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     ap.add_argument('--seeds', type=int, default=50)
     ap.add_argument('--seed0', type=int, default=0)
     args = ap.parse_args()
     start = time.perf_counter()
-    rows, refused, count = [], [], dict(cases=0, successes=0)
+    rows, poor, refused = [], [], []
+    count = dict(cases=0, successes=0)
     worse = dict(default=0, before=0, linear=0)
     for seed in range(args.seed0, args.seed0 + args.seeds):
         for label, kw in VARIANTS:
@@ -96,9 +107,13 @@ def main():
                                  f"{e_before:.3g}", f"{e:.3g}"])
                 worse['default'] += e > 1
                 worse['before'] += e_before > 1
-            if lin is not None:
-                worse['linear'] += rms_travels(case.plant, lin, r,
-                                               travel) > 1
+            e_lin = (np.nan if lin is None else
+                     rms_travels(case.plant, lin, r, travel))
+            worse['linear'] += e_lin > 1
+            if ctrl is not None and e > 1:
+                poor.append([seed, label, f"{res.fit:.1f}",
+                             f"{res.linear['fit']:.1f}", f"{e:.3g}",
+                             f"{e_lin:.3g}", _source(ctrl, res)])
     print(f"servo_controller on identified random plants (n = 2000, SNR "
           f"100), seeds {args.seed0} to {args.seed0 + args.seeds - 1}; "
           f"RMS error on the true plant in travels\n")
@@ -106,6 +121,9 @@ def main():
           "mbar L1 L2 (the baseline's loop diverged around the sandwich):")
     print_table(['seed', 'variant', 'sandwich fit %', 'baseline fit %',
                  'feedback on baseline', 'default'], rows)
+    print("\ndefault designs worse than one travel:")
+    print_table(['seed', 'variant', 'sandwich fit %', 'baseline fit %',
+                 'default', 'linear design', 'feedback on'], poor)
     print(f"\n{count['successes']} successes of {count['cases']} cases in "
           f"{time.perf_counter() - start:.0f} s; moved: {len(rows)}")
     print(f"RMS error above one travel: default {worse['default']}, with "
