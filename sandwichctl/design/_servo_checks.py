@@ -20,6 +20,10 @@ from .loop import servo_loop
 #: identified model this much worse (a gross failure: on the drives the
 #: model predicts little of what compensation gains or loses)
 HARM = 1.25
+#: `servo_controller`'s keywords of the same design with its feedback
+#: alone (no feedforward, hence no band compensation)
+FEEDBACK_ALONE = dict(feedforward=None, band_fraction=None, smoothing=None,
+                      jump_samples=None, adapt=None)
 
 
 def scalar_index(ctrl):
@@ -73,8 +77,7 @@ def feedforward_checked(ctrl, design, model, ff_model, r):
     times too large). `design(**kw)` is the same design with the keywords
     kw changed; `ff_model` whether ctrl's feedforward inverts the
     sandwich's mbar L1 L2 (else the baseline)."""
-    bare = design(feedforward=None, band_fraction=None, smoothing=None,
-                  jump_samples=None, adapt=None)
+    bare = design(**FEEDBACK_ALONE)
     e, e_bare = loop_error(ctrl, model, r), loop_error(bare, model, r)
     if e <= HARM * e_bare:
         return ctrl
@@ -107,10 +110,9 @@ def feedback_checked(ctrl, design, model, own, r):
     radius = loop_radius(*tf_arrays(own), ctrl.pid)
     if not radius >= 1:
         return None
-    bare = dict(feedforward=None, band_fraction=None, smoothing=None,
-                jump_samples=None, adapt=None)
-    e = loop_error(design(**bare), model, r)
-    e_own = loop_error(design(feedback_from='model', **bare), model, r)
+    e = loop_error(design(**FEEDBACK_ALONE), model, r)
+    e_own = loop_error(design(feedback_from='model', **FEEDBACK_ALONE),
+                       model, r)
     if e <= HARM * e_own:
         return None
     other = design(feedback_from='model')

@@ -765,6 +765,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         notes.append(f"compensation turned off: with it, tracking on the "
                      f"identified model itself was over {HARM:g} times "
                      f"worse than without (pass band_fraction to force it)")
+
     def redo(**kw):
         return servo_controller(source, **{**asked, **kw})
     if checked and feedback_from == 'auto' and P is lin_model:
