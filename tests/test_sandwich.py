@@ -429,6 +429,23 @@ def test_simulate_accepts_evenly_spaced_timepts_only():
         plant.simulate(np.ones(30), timepts=np.arange(30))
 
 
+def test_simulate_with_timepts_returns_the_inputs_given():
+    # the kernel copies u only where it also writes the time points: with
+    # time points given, the response's inputs were an unfilled buffer
+    plant = sw.SandwichSystem(ct.tf([1], [1, -0.5], 0.1),
+                              sw.Backlash(1, 1, 0.1, 0.1),
+                              ct.tf([1], [1, -0.9], 0.1))
+    u = np.sin(0.3 * np.arange(30))
+    t = 5 + 0.1 * np.arange(30)
+    for internal in (False, True):
+        resp = plant.simulate(u, timepts=t, internal=internal)
+        np.testing.assert_array_equal(np.ravel(resp.inputs), u)
+        np.testing.assert_array_equal(resp.time, t)
+    step = sw.step_response(plant, amplitude=2.0)
+    np.testing.assert_array_equal(np.ravel(step.inputs),
+                                  np.full(step.time.size, 2.0))
+
+
 def test_from_coefficients_keeps_orders_without_extra_states():
     plant = sw.SandwichSystem.from_coefficients(
         a=[0.1, 0.2, 0.0], b=[1.5, 0.0], c=[1.2, 0.32], d=[2, -0.1, 0.0],

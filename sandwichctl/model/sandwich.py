@@ -527,9 +527,10 @@ class SandwichSystem(ct.InterconnectedSystem):
         if comp is False:                 # first call: read the form once
             comp = self._companion = companion_form(*self._matrices)
         if comp is not None:
-            # the kernel also fills the time points and the copy of u
+            # the kernel also fills the time points and the copy of u,
+            # both or neither (given time points: u is copied here)
             t = np.empty(n if timepts is None else 0)
-            u_copy = np.empty(n)
+            u_copy = np.empty(n) if timepts is None else u.copy()
             bad = companion_kernel(u, *comp, *self._backlash_values, state,
                                    y, x, v, states, step, t, u_copy)
             timepts = t if timepts is None else timepts
