@@ -57,6 +57,19 @@ RINGING = -0.5
 AT_ONE = 1e-6
 #: truncation of the anticausal series of an unstable zero
 SERIES_TOL = 1e-3
+#: the most phase (rad) the poles of a plant may turn between
+#: neighbouring points of `frequency_grid`: each turns it by up to about
+#: a radian per rad/sample (a pole at 0, one sample of delay, by exactly
+#: that), and the log grid's steps widen towards pi, so a plant of many
+#: poles (a long delay) gets a uniform grid there too. With the log grid
+#: alone, 20 samples of delay in both blocks of the paper's plant gave a
+#: PID whose modulus margin, 0.6 on the grid, was 0.58 between its points
+#: near the Nyquist frequency (0.52 with 40).
+GRID_PHASE_STEP = 0.2
+#: points around the angle of a pole whose resonance peak (about 1 - |p|
+#: wide) is narrower than the log grid's step there, in units of 1 - |p|
+PEAK_OFFSETS = np.r_[np.linspace(-3, 3, 61), np.logspace(0.5, 1.5, 6),
+                     -np.logspace(0.5, 1.5, 6)]
 
 
 def at_one(roots):
@@ -66,11 +79,25 @@ def at_one(roots):
 
 
 def frequency_grid(den, n=1500):
-    """Log frequency grid (rad/sample) from below the slowest pole to pi."""
+    """Log frequency grid (rad/sample) from below the slowest pole to pi,
+    with more points where a log grid of `n` is too coarse for the plant
+    of denominator `den` (see `GRID_PHASE_STEP`)."""
     poles = np.roots(den) if den.size > 1 else np.zeros(0)
     gap = 1.0 - np.abs(poles[np.abs(poles) < 1.0 - 1e-12])
-    low = min(1e-4, 0.1 * gap.min()) if gap.size else 1e-4
-    return np.logspace(np.log10(max(low, 1e-9)), np.log10(np.pi), n)
+    low = max(min(1e-4, 0.1 * gap.min()) if gap.size else 1e-4, 1e-9)
+    w = np.logspace(np.log10(low), np.log10(np.pi), n)
+    step = w[1] / w[0] - 1.0            # the log grid's step over w
+    parts = [w]
+    if poles.size * np.pi * step > GRID_PHASE_STEP:
+        # uniform beyond where the log grid's step passes GRID_PHASE_STEP
+        h = GRID_PHASE_STEP / poles.size
+        parts.append(np.arange(h / step, np.pi, h))
+    r, angle = np.abs(poles), np.abs(np.angle(poles))
+    for rj, aj in zip(r, angle):
+        if 0 < 1 - rj < aj * step:          # a peak narrower than a step
+            parts.append(aj + (1 - rj) * PEAK_OFFSETS)
+    w = np.concatenate(parts)
+    return np.unique(w[(w >= low) & (w <= np.pi)])
 
 
 def series_length(zj):
