@@ -35,6 +35,14 @@ MAX_ORDER = 1000
 #: numpy's MemoryError of terabytes.
 MOST_SAMPLES = 10 ** 8
 
+#: Most iterations of a search's loops (``max_iter``, ``screen_iter``,
+#: ``sp_iter``) and most starts, hops, rounds or kept candidates
+#: (``n_random``, ``hops``, ``n_starts``, a bundle's ``k1``, ...): more is
+#: a typo (``hops=10**6``) that would run for hours, or allocate
+#: gigabytes, before failing.
+MOST_ROUNDS = 100_000
+MOST_STARTS = 1000
+
 #: Peak magnitudes of data the identifiers accept: their least-squares
 #: costs are sums of squares (and of products of u and y), which overflow
 #: or underflow double precision far outside this range (1e200 does).
@@ -156,6 +164,20 @@ def check_real(name, value):
     """Return `value` as float, requiring a real number (NaN and inf pass:
     the caller says what they mean for it)."""
     return _as_real_scalar(name, value)
+
+
+def check_rng(name, seed):
+    """numpy's generator of `seed` (None, an integer >= 0, a seed sequence
+    or a Generator), refused with a message naming it."""
+    try:
+        if isinstance(seed, (bool, np.bool_)):
+            raise TypeError("a bool is no seed")
+        return np.random.default_rng(seed)
+    except (TypeError, ValueError) as exc:
+        kind = TypeError if isinstance(exc, TypeError) else ValueError
+        raise kind(f"{name} must be None, an integer >= 0 or a "
+                   f"numpy.random.Generator; got {type(seed).__name__} "
+                   f"{seed!r}") from None
 
 
 def check_int(name, value, minimum=0, maximum=None):
@@ -312,6 +334,9 @@ def _real_array(name, values, what):
         except (TypeError, ValueError):
             raise TypeError(f"{name} must be {what}; got "
                             f"{type(values).__name__}") from None
+        except OverflowError:
+            raise ValueError(f"{name} holds an integer too large for a "
+                             f"float") from None
     return np.asarray(raw, dtype=float)
 
 

@@ -173,3 +173,16 @@ def test_a_pair_of_columns_is_one_experiment():
         assert len(exps) == 1
         np.testing.assert_array_equal(exps.u[0], u)
         np.testing.assert_array_equal(exps.y[0], y)
+
+
+def test_experiments_built_by_hand_are_checked_and_keep_their_dt():
+    # the constructor took anything, and identify then read dt=True
+    u = sw.examples.paper_input(400, seed=2)
+    y = sw.examples.paper_plant(dt=0.1).simulate(u).outputs
+    data = sw.Experiments([(u, y), (u[:300], y[:300])], 0.1)
+    assert len(data) == 2 and data.dt == 0.1 and data.n_samples == 700
+    assert sw.as_experiments(data).dt == 0.1
+    res = sw.identify_linear(data, nb=1, nf=2, nk=1)
+    assert res.model.dt == 0.1
+    with pytest.raises(ValueError, match='same length'):
+        sw.Experiments([(u, y[:10])], 0.1)

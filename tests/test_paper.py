@@ -53,6 +53,14 @@ def test_add_noise_default_is_the_variance_ratio():
         examples.add_noise(y, 46.5, seed=4, kind='variance'))
 
 
+def test_add_noise_of_a_huge_ratio_adds_next_to_nothing():
+    # snr ** 2 and 10 ** (snr / 10) overflowed Python floats (OverflowError)
+    y = np.cos(0.3 * np.arange(500))
+    for kind in ('variance', 'amplitude', 'db'):
+        noisy = examples.add_noise(y, 1e300, seed=4, kind=kind)
+        assert np.max(np.abs(noisy - y)) < 1e-100
+
+
 def test_add_noise_rejects_an_unknown_reading():
     with pytest.raises(ValueError, match=r"kind must be one of \['amplitude'"
                                          r", 'db', 'variance'\]; got 'power'"):

@@ -6,6 +6,7 @@ survive a pickle; a drive too coarse to integrate is refused before it
 runs."""
 
 import pickle
+import warnings
 
 import numpy as np
 import control as ct
@@ -118,3 +119,17 @@ def test_every_random_drive_passes_the_substep_check_and_a_coarse_one_not():
     fine = sw.data.ServoDrive(k=5e10, substeps=400, n=300, seed=0)
     y = [fine.step(1e-3) for _ in range(299)]
     assert np.all(np.isfinite(y)) and np.max(np.abs(y)) < 1e-2
+
+
+def test_a_failed_identification_warns_when_designed_from():
+    rng = np.random.default_rng(3)
+    u, y = rng.standard_normal(600), rng.standard_normal(600)
+    with warnings.catch_warnings():      # the identification's own
+        warnings.simplefilter('ignore', sw.IdentificationWarning)
+        res = sw.identify(u, y, na=1, nb=0, nc=1, nd=0)
+    assert not res.success
+    with pytest.warns(sw.IdentificationWarning, match='not a success') as got:
+        ctrl = sw.servo_controller(res)
+    # once, though the design's checks design again
+    assert sum('not a success' in str(w.message) for w in got) == 1
+    assert any('not a success' in note for note in ctrl.notes)

@@ -72,7 +72,7 @@ import numpy as np
 
 from .._checks import (MOST_SAMPLES, PLAIN_REALS, check_bool, check_int,
                        check_positive, check_nonnegative, check_option,
-                       check_real, check_signal)
+                       check_real, check_rng, check_signal)
 
 __all__ = ['servo_drive', 'ServoDrive', 'random_drive', 'drive_reference', 'drive_case', 'DriveCase',
            'DRIVE_PARAMETERS', 'DRIVE_DT']
@@ -118,19 +118,6 @@ MOST_PLAY = 0.1
 #: most sub-steps a sample (random_drive draws at most a few hundred)
 MOST_SUBSTEPS = 10_000
 _LOOPS = ('position', 'speed')
-
-
-def _rng(name, seed):
-    """numpy's generator of `seed`, refused with a message naming it."""
-    try:
-        if isinstance(seed, (bool, np.bool_)):
-            raise TypeError("a bool is no seed")
-        return np.random.default_rng(seed)
-    except (TypeError, ValueError) as exc:
-        kind = TypeError if isinstance(exc, TypeError) else ValueError
-        raise kind(f"{name} must be None, an integer >= 0 or a "
-                   f"numpy.random.Generator; got {type(seed).__name__} "
-                   f"{seed!r}") from None
 
 
 def _params(params):
@@ -357,7 +344,7 @@ def _setup(loop, play, dt, seed, n, params):
     dt = _check_sample_time(dt)
     p = _params(params)
     _check_substep(p, dt)
-    rng = _rng('seed', seed)
+    rng = check_rng('seed', seed)
     disturbance = p['torque_noise'] * rng.standard_normal(n)
     offset = rng.uniform(0, p['resolution'])
     q_motor = 2 * np.pi / p['counts'] if p['counts'] else 0.0
@@ -471,7 +458,10 @@ class ServoDrive:
             raise RuntimeError(f"the drive was set up for n = "
                                f"{su.disturbance.size} samples; make it "
                                f"with a larger n")
-        u = float(u) if type(u) in PLAIN_REALS else check_real('u', u)
+        try:
+            u = float(u) if type(u) in PLAIN_REALS else check_real('u', u)
+        except OverflowError:                   # an int beyond a float
+            u = check_real('u', u)
         if not np.isfinite(u):
             raise ValueError(f"u must be finite; got {u}")
         torque = _drive_step(self._state, u, su.position_loop, su.prm,
@@ -555,7 +545,7 @@ def drive_reference(n, loop='position', rng=None, dt=DRIVE_DT):
     n = check_int('n', n, minimum=2, maximum=MOST_SAMPLES)
     check_option('loop', loop, _LOOPS)
     dt = _check_sample_time(dt)
-    rng = _rng('rng', rng)
+    rng = check_rng('rng', rng)
     hold = (max(1, int(0.15 / dt)), max(2, int(0.6 / dt)))
     if loop == 'position':
         return (_staircase(n, rng, hold, 1.0, 2.0)

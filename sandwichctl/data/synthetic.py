@@ -55,7 +55,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from ..model.sandwich import SandwichSystem
-from .._checks import MOST_SAMPLES, check_int, check_positive
+from .._checks import MOST_SAMPLES, check_int, check_positive, check_rng
 
 __all__ = ['excitation', 'random_case', 'random_family', 'family_specs',
            'SyntheticCase', 'KINDS', 'SNRS', 'N_RANGE', 'N_BUCKETS']
@@ -85,16 +85,6 @@ _SCALE_RANGE = (1e-3, 1e3)
 # ----------------------------------------------------------------------
 # Excitation
 # ----------------------------------------------------------------------
-def _as_rng(name, rng):
-    if isinstance(rng, np.random.Generator):
-        return rng
-    if rng is None or (isinstance(rng, (int, np.integer))
-                       and not isinstance(rng, bool) and rng >= 0):
-        return np.random.default_rng(rng)
-    raise TypeError(f"{name} must be a numpy.random.Generator, a seed "
-                    f"(int >= 0) or None; got {type(rng).__name__} {rng!r}")
-
-
 def _unit(s):
     """Zero mean, unit RMS."""
     s = s - s.mean()
@@ -190,7 +180,7 @@ def excitation(kind, n, rng=None):
     if not (isinstance(kind, str) and kind in _GENERATORS):
         raise ValueError(f"kind must be one of {list(KINDS)}; got {kind!r}")
     n = check_int('n', n, minimum=2, maximum=MOST_SAMPLES)
-    rng = _as_rng('rng', rng)
+    rng = check_rng('rng', rng)
     for _ in range(100):
         s = _GENERATORS[kind](n, rng)
         if np.ptp(s) > 0:

@@ -103,6 +103,14 @@ def check_plant_tf(name, sys):
             f"over largest denominator coefficient), outside {lo:g} .. "
             f"{hi:g}: the design squares it, which would {what} double "
             f"precision; rescale u or y (other units)")
+    zeros = np.roots(num) if num.size > 1 else np.zeros(0)
+    if np.any(sd.at_one(zeros)):
+        raise ValueError(
+            f"{name} has a zero at z = 1 (zeros {sd._fmt_roots(zeros)}): "
+            f"its gain at DC is zero, so no input holds its output at a "
+            f"constant reference. A plant that differentiates (position in, "
+            f"speed out) is servoed on its integrated output; else "
+            f"re-identify with fewer zeros")
     poles = np.roots(den) if den.size > 1 else np.zeros(0)
     one = sd.at_one(poles)
     if one.sum() > 1 or np.any(np.abs(poles[~one]) >= 1.0):

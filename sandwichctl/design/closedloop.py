@@ -407,9 +407,9 @@ def plot_loop(ctrl, ax=None):
     --------
     >>> import matplotlib
     >>> matplotlib.use('Agg')
-    >>> import control as ct, sandwichctl as sw
+    >>> import matplotlib.pyplot as plt, control as ct, sandwichctl as sw
     >>> ctrl = sw.servo_controller(ct.tf([0.1], [1, -0.9], 0.001))
-    >>> ax = sw.plot_loop(ctrl)
+    >>> ax = sw.plot_loop(ctrl, ax=plt.figure().add_subplot())
     >>> ax.get_ylabel()
     '|S| = 1 / |1 + C P|'
     """

@@ -58,9 +58,9 @@ from scipy.optimize import brentq
 from ..model.backlash import Backlash
 from ..model.sandwich import SandwichSystem
 from .closedloop import TrackingController, closed_loop_response
-from .._checks import (check_finite, check_nonnegative, check_positive,
-                       check_signal, check_int, check_bool, check_name,
-                       check_discrete_siso_tf)
+from .._checks import (MOST_SAMPLES, check_finite, check_nonnegative,
+                       check_positive, check_signal, check_int, check_bool,
+                       check_name, check_discrete_siso_tf)
 
 __all__ = ['BacklashNonlinearity', 'backlash_nonlinearity',
            'backlash_harmonics', 'unit_circle_frd', 'limit_cycles',
@@ -548,7 +548,7 @@ def simulate_limit_cycle(plant, C, n=8000, kick=1.0, settle=None):
     response : control.TimeResponseData
         The simulation (`closed_loop_response`).
     """
-    n = check_int('n', n, minimum=8)
+    n = check_int('n', n, minimum=8, maximum=MOST_SAMPLES)
     kick = check_finite('kick', kick)
     settle = n // 2 if settle is None else check_int('settle', settle)
     if settle > n - 4:

@@ -55,7 +55,11 @@ def steps_and_sines(n=1200, levels=(0.0, 1.0, -0.5, 1.5, 0.3),
                          f"{levels.size} levels (give n >= "
                          f"{2 * levels.size})")
     amplitudes = check_vector('amplitudes', amplitudes)
-    periods = check_vector('periods', periods, amplitudes.size)
+    periods = check_vector('periods', periods)
+    if periods.size != amplitudes.size:
+        raise ValueError(f"amplitudes and periods must have the same length "
+                         f"(a period per sine); got {amplitudes.size} "
+                         f"amplitude(s) and {periods.size} period(s)")
     if np.any(periods <= 0):
         raise ValueError(f"periods must be > 0 (in samples); got {periods}")
     half = n // 2

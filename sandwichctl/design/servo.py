@@ -73,6 +73,7 @@ the error keeps the PID's states, so u does not jump.
 """
 
 import math
+import warnings
 
 import numpy as np
 import control as ct
@@ -91,9 +92,9 @@ from ._servo_kernel import (pack, servo_step, servo_step_kept, servo_run,
                             NSCALAR, IX_ADAPT, IX_BLEND, IX_GUARD, IX_SCALAR)
 from .loop import ss_arrays
 from ..model.sandwich import SandwichSystem
-from .._checks import (MAX_ORDER, PLAIN_REALS, check_finite, check_int,
-                       check_nonnegative, check_positive, check_real,
-                       check_signal)
+from .._checks import (MAX_ORDER, PLAIN_REALS, IdentificationWarning,
+                       check_finite, check_int, check_nonnegative,
+                       check_positive, check_real, check_signal, warn)
 
 
 __all__ = ['ServoController', 'servo_controller']
@@ -496,8 +497,13 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     ------
     ValueError
         If the model is unstable (more than one integrator, or a pole
-        outside the unit circle), has no delay, or no PID meets the
-        margin with a stable loop.
+        outside the unit circle), has no delay, has a zero at z = 1, or
+        no PID meets the margin with a stable loop.
+
+    Warns
+    -----
+    IdentificationWarning
+        If the model is an identification result that is not a success.
 
     Examples
     --------
@@ -514,6 +520,11 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     asked = {k: v for k, v in locals().items() if k != 'model'}
     source = model
     model, result = unwrap_model(model)
+    if result is not None and not getattr(result, 'success', True):
+        warn(f"servo_controller: designing from an identification result "
+             f"that is not a success ({getattr(result, 'message', '')}); "
+             f"check the model, or re-identify, before closing the loop",
+             IdentificationWarning)
     band_by_default = band_fraction is None
     mm, adapt, crossover_limit, max_preview, name, (u0, y0) = \
         check_options(modulus_margin, feedforward, feedforward_from,
@@ -767,7 +778,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                      f"worse than without (pass band_fraction to force it)")
 
     def redo(**kw):
-        return servo_controller(source, **{**asked, **kw})
+        with warnings.catch_warnings():     # a failed result: warned once
+            warnings.simplefilter('ignore', IdentificationWarning)
+            return servo_controller(source, **{**asked, **kw})
     if checked and feedback_from == 'auto' and P is lin_model:
         own = feedback_checked(ctrl, redo, model, mbar * model.L1 * model.L2,
                                r)

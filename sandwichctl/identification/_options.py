@@ -14,7 +14,8 @@ import numbers
 import numpy as np
 
 from .result import MIN_FIT
-from .._checks import (check_bool, check_finite, check_int, check_nonnegative,
+from .._checks import (MOST_ROUNDS, MOST_SAMPLES, MOST_STARTS, check_bool,
+                       check_finite, check_int, check_nonnegative,
                        check_option, check_positive, check_tolerance)
 
 __all__ = []
@@ -128,6 +129,10 @@ class OEOptions(_Options):
     _MINIMA = dict(screen_iter=1, sp_iter=0, sp_starts=0, n_random=0, seed=0,
                    keep=1, refits=0, max_splits=1, hops=0, relocate=0,
                    screen_samples=100, max_iter=1)
+    #: the most of each count: a typo (hops=10**6) would run for hours
+    _MAXIMA = dict(screen_iter=MOST_ROUNDS, sp_iter=MOST_ROUNDS,
+                   max_iter=MOST_ROUNDS, screen_samples=MOST_SAMPLES,
+                   seed=None)
 
     def __post_init__(self):
         k = self.integrators
@@ -158,7 +163,8 @@ class OEOptions(_Options):
                              f"in (0, 10); got {widths!r}")
         self._set('widths', tuple(float(w) for w in widths))
         for name, minimum in self._MINIMA.items():
-            self._set(name, check_int(name, getattr(self, name), minimum))
+            self._set(name, check_int(name, getattr(self, name), minimum,
+                                      self._MAXIMA.get(name, MOST_STARTS)))
         self._set('smooth', check_bool('smooth', self.smooth))
         self._set('tol', check_tolerance('tol', self.tol))
         self._set('min_fit', check_finite('min_fit', self.min_fit))
@@ -217,7 +223,7 @@ class BundleOptions(_RecursiveCommon):
     def __post_init__(self):
         self._check_predictor()
         self._check_common()
-        self._set('k1', check_int('k1', self.k1, minimum=1))
+        self._set('k1', check_int('k1', self.k1, 1, MOST_STARTS))
         eta0 = check_positive('eta0', self.eta0)
         if eta0 > 1:
             raise ValueError(f"eta0 must be in (0, 1] (eq. (3.7)); got "
@@ -225,7 +231,7 @@ class BundleOptions(_RecursiveCommon):
         self._set('eta0', eta0)
         self._set('delta', check_positive('delta', self.delta))
         self._check_steps(eta0)
-        self._set('n_ls', check_int('n_ls', self.n_ls, minimum=0))
+        self._set('n_ls', check_int('n_ls', self.n_ls, 0, MOST_STARTS))
         self._set('step_bound', check_bool('step_bound', self.step_bound))
         self._set('full_step_test',
                   check_bool('full_step_test', self.full_step_test))

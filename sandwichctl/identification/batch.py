@@ -51,8 +51,8 @@ from ._lm import lm
 from ._problem import Problem, unit_poles
 from ._starts import admissible, perturb
 from ..model.sandwich import SandwichSystem
-from .._checks import (check_bool, check_int, check_positive,
-                       check_tolerance, progress_bar, serial_blas)
+from .._checks import (MOST_STARTS, check_bool, check_int, check_positive,
+                       check_rng, check_tolerance, progress_bar, serial_blas)
 
 __all__ = ['refine']
 
@@ -119,7 +119,7 @@ def refine(model, u, y=None, max_iter=100, tol=1e-10, n_starts=1,
     us, ys, _, offset_info, estimate = prepare(u, y, model.dt, offsets)
     max_iter = check_int('max_iter', max_iter, minimum=1)
     progress = check_bool('progress', progress)
-    n_starts = check_int('n_starts', n_starts, minimum=1)
+    n_starts = check_int('n_starts', n_starts, 1, MOST_STARTS)
     tol = check_tolerance('tol', tol)
     spread = check_positive('spread', spread)
     m_min = check_positive('m_min', m_min)
@@ -134,7 +134,7 @@ def refine(model, u, y=None, max_iter=100, tol=1e-10, n_starts=1,
                          f"for {st.size} parameters")
     phi0 = admissible(st, prob.phi_of_model(norm), m_min)
     st.widen_zero_radius(phi0)
-    rng = np.random.default_rng(seed)
+    rng = check_rng('seed', seed)
     start = time.perf_counter()
     best = None
     for i in _progress_range(n_starts, progress, 'refine'):

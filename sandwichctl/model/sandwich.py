@@ -38,7 +38,7 @@ from ._coefficients import (declare_orders, difference_coefficients,
 from .._checks import (check_discrete_siso_tf, check_order, check_signal,
                        check_vector, common_dt, check_name, check_label,
                        check_bool, check_dt, check_option, check_timepts,
-                       check_finite, warn, SimulationWarning)
+                       check_finite, warn, SimulationWarning, MOST_SAMPLES)
 
 __all__ = ['SandwichSystem', 'theta_labels', 'step_response']
 
@@ -527,8 +527,7 @@ class SandwichSystem(ct.InterconnectedSystem):
         if comp is False:                 # first call: read the form once
             comp = self._companion = companion_form(*self._matrices)
         if comp is not None:
-            # the kernel also fills the time points and the copy of u,
-            # both or neither (given time points: u is copied here)
+            # the kernel fills the time points and copies u, or neither
             t = np.empty(n if timepts is None else 0)
             u_copy = np.empty(n) if timepts is None else u.copy()
             bad = companion_kernel(u, *comp, *self._backlash_values, state,
@@ -743,9 +742,9 @@ def step_response(sys, timepts=None, amplitude=1.0, initial_state=None):
             timepts = step * np.arange(settle())
     elif np.ndim(timepts) == 0:
         tfinal = check_finite('timepts', timepts)
-        if tfinal < 0:
-            raise ValueError(f"timepts, as a final time, must be >= 0; got "
-                             f"{tfinal}")
+        if not 0 <= tfinal / step < MOST_SAMPLES:
+            raise ValueError(f"timepts (a final time) must be in [0, "
+                             f"{MOST_SAMPLES:.0e} dt); got {tfinal}")
         timepts = step * np.arange(int(np.floor(tfinal / step + 1e-9)) + 1)
     else:
         timepts = check_vector('timepts', timepts)

@@ -12,7 +12,7 @@ import control as ct
 
 from ..model.sandwich import SandwichSystem
 from .._checks import (check_int, check_positive, check_nonnegative,
-                          check_finite, check_signal)
+                       check_finite, check_rng, check_signal)
 
 __all__ = ['paper_plant', 'paper_input', 'add_noise', 'SNR_KINDS',
            'PAPER_THETA0']
@@ -65,7 +65,7 @@ def paper_input(n, variance=0.49, seed=None):
     """
     n = check_int('n', n, minimum=1)
     variance = check_positive('variance', variance)
-    rng = np.random.default_rng(seed)
+    rng = check_rng('seed', seed)
     return np.sqrt(variance) * rng.standard_normal(n)
 
 
@@ -139,14 +139,15 @@ def add_noise(y, snr, seed=None, kind='variance'):
     if kind not in SNR_KINDS:
         raise ValueError(f"kind must be one of {sorted(SNR_KINDS)}; got "
                          f"{kind!r}")
-    ratio = {'variance': snr, 'amplitude': snr ** 2,
-             'db': 10 ** (snr / 10)}[kind]
+    with np.errstate(over='ignore'):       # a huge snr: no noise
+        ratio = {'variance': snr, 'amplitude': np.float64(snr) ** 2,
+                 'db': np.float64(10.0) ** (snr / 10)}[kind]
     if np.var(y) == 0:
         raise ValueError("y is constant, so a signal-to-noise ratio gives "
                          "it no noise; add noise of a chosen standard "
                          "deviation instead (y + sigma * "
                          "rng.standard_normal(y.size))")
-    rng = np.random.default_rng(seed)
+    rng = check_rng('seed', seed)
     return y + rng.standard_normal(y.shape) * np.sqrt(np.var(y) / ratio)
 
 
@@ -276,6 +277,12 @@ def _impulse_invariant(sysc, dt):
     return den[1:] / den[0], np.trim_zeros(num[lead:], 'b') / den[0], q
 
 
+#: longest sample time `xy_stage` takes, in seconds: there its slowest
+#: pole (-56 /s) maps to e^{s dt} = 0.06 and the others to 0; much longer
+#: ones leave nothing of its dynamics, and impulse invariance underflows
+XY_STAGE_MOST_DT = 0.05
+
+
 def xy_stage(dt=XY_STAGE_DT, name='xy_stage', **params):
     r"""One axis of the X-Y positioning stage of Section 6 (eqs. (6.1)-(6.3)).
 
@@ -333,7 +340,8 @@ def xy_stage(dt=XY_STAGE_DT, name='xy_stage', **params):
     TypeError
         If a parameter name is unknown.
     ValueError
-        If a parameter or dt is not a finite positive number.
+        If a parameter or dt is not a finite positive number, or dt is
+        above `XY_STAGE_MOST_DT`.
 
     See Also
     --------
@@ -357,6 +365,11 @@ def xy_stage(dt=XY_STAGE_DT, name='xy_stage', **params):
            -0.404])
     """
     dt = check_positive('dt', dt)
+    if dt > XY_STAGE_MOST_DT:
+        raise ValueError(f"dt must be at most {XY_STAGE_MOST_DT} s for the "
+                         f"stage, whose slowest time constant is 18 ms "
+                         f"(longer samples leave nothing of its dynamics); "
+                         f"got {dt}")
     motor, platform = xy_stage_continuous(**params)
     p = _xy_params(params)
     a, b, q1 = _impulse_invariant(motor, dt)
@@ -427,7 +440,7 @@ def xy_stage_input(n, dt=XY_STAGE_DT, square_amplitude=0.62,
     jitter = check_nonnegative('jitter', jitter)
     if jitter >= 1:
         raise ValueError(f"jitter must be in [0, 1); got {jitter}")
-    rng = np.random.default_rng(seed)
+    rng = check_rng('seed', seed)
     half = period / 2 / dt                       # samples per half-period
     square = np.empty(n)
     level = 1.0 if rng.random() < 0.5 else -1.0
@@ -492,7 +505,7 @@ def xy_stage_measurement(y, dt=XY_STAGE_DT, resolution=1e-4, noise_std=0.2,
     dt = check_positive('dt', dt)
     resolution = check_nonnegative('resolution', resolution)
     noise_std = check_nonnegative('noise_std', noise_std)
-    rng = np.random.default_rng(seed)
+    rng = check_rng('seed', seed)
     measured = y.copy()
     if resolution > 0:
         p0 = rng.uniform(0, resolution)

@@ -43,7 +43,15 @@ class Experiments(list):
     (2, 7, 0.1)
     """
 
-    def __init__(self, pairs, dt):
+    def __init__(self, pairs, dt, _checked=False):
+        if not _checked:             # built by a user: read as any data
+            try:
+                pairs = list(pairs)
+            except TypeError:
+                raise TypeError(f"pairs must be a list of (u, y) pairs; got "
+                                f"{type(pairs).__name__}") from None
+            data = as_experiments(pairs, dt=_check_dt(dt))
+            pairs, dt = list(data), data.dt
         super().__init__(pairs)
         self.dt = dt
 
@@ -177,6 +185,8 @@ def as_experiments(u, y=None, dt=None):
     >>> len(sw.as_experiments((np.sin(t), np.cos(t))))      # one (u, y)
     1
     """
+    if isinstance(u, Experiments) and y is None and dt is None:
+        dt = u.dt                       # its own sampling time
     dt = _check_dt(dt)
     if y is not None:
         if isinstance(u, (ct.TimeResponseData, list, tuple)) and not \
@@ -216,4 +226,4 @@ def as_experiments(u, y=None, dt=None):
             raise ValueError(f"dt = {dt:g} does not match the records' time "
                              f"step {ref:g}")
         dt = ref
-    return Experiments(pairs, True if dt is None else dt)
+    return Experiments(pairs, True if dt is None else dt, _checked=True)
