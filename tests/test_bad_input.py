@@ -11,6 +11,7 @@ elsewhere; a fix turns them into XPASS, which fails, so that the mark is
 removed with the fix.
 """
 
+import io
 import json
 import time
 
@@ -1205,6 +1206,24 @@ ROWS = [
      'dt'),
     ('examples.xy_stage-dt-huge',
      lambda t: sw.examples.xy_stage(dt=1e300), VE, 'dt'),
+    ('RecursiveIdentifier-keep_history',
+     lambda t: sw.RecursiveIdentifier(**ORD, keep_history='no'), TE,
+     'keep_history'),
+    ('save_model-binary-file',
+     lambda t: sw.save_model(PLANT, io.BytesIO()), TE, 'text mode'),
+    ('save_model-empty-path', lambda t: sw.save_model(PLANT, ''), VE,
+     'path is empty'),
+    ('load_model-empty-path', lambda t: sw.load_model(''), VE,
+     'path is empty'),
+    ('unit_circle_frd-one-frequency',
+     lambda t: sw.unit_circle_frd(L1, omega=[0.1]), VE, 'omega'),
+    ('sandwich_limit_cycles-dt',
+     lambda t: sw.sandwich_limit_cycles(PLANT, ct.tf([0.3, -0.2], [1, -1],
+                                                     2)), VE,
+     'same sampling time'),
+    ('sandwich_limit_cycles-huge-C',
+     lambda t: sw.sandwich_limit_cycles(PLANT, ct.tf([1e300], [1], 1)), VE,
+     "C's gain"),
     ('servo_controller-zero-at-one',
      lambda t: sw.servo_controller(ct.tf([1, -1], [1, -0.5, 0], 1)), VE,
      'zero at z = 1'),

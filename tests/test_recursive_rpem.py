@@ -43,6 +43,22 @@ def test_rpem_recovers_from_divergence_instead_of_blowing_up():
     assert np.mean(e[-500:] ** 2) < 0.2 * np.mean(e[:500] ** 2)
 
 
+def test_rpem_that_only_resets_is_no_success():
+    # at 1e60 the covariance's trace overflows at every sample: the
+    # estimate stays theta0, which was reported as a success
+    plant, u, y = _data(500, seed=0)
+    ri = sw.RecursiveIdentifier(**plant.orders, method='rpem')
+    ri.update_many(u * 1e60, y * 1e60)
+    res = ri.result()
+    assert res.counts['reset'] > 250
+    assert not res.success and 'did not learn' in res.message
+    ok = sw.RecursiveIdentifier(**plant.orders, method='rpem')
+    ok.update_many(u, y)
+    assert ok.result().success and ok.result().counts['reset'] == 0
+    with pytest.raises(ValueError, match='u has peak magnitude'):
+        ok.update_many(u * 1e200, y)
+
+
 def test_rpem_series_parallel_converges_noise_free():
     plant, u, y = _data(3000, seed=1)
     res = sw.identify(u, y, **plant.orders, method='rpem', warmup=3000)

@@ -58,9 +58,10 @@ from scipy.optimize import brentq
 from ..model.backlash import Backlash
 from ..model.sandwich import SandwichSystem
 from .closedloop import TrackingController, closed_loop_response
-from .._checks import (MOST_SAMPLES, check_finite, check_nonnegative,
-                       check_positive, check_signal, check_int, check_bool,
-                       check_name, check_discrete_siso_tf)
+from .._checks import (DATA_RANGE, MOST_SAMPLES, check_finite,
+                       check_nonnegative, check_positive, check_signal,
+                       check_int, check_bool, check_name,
+                       check_discrete_siso_tf, common_dt)
 
 __all__ = ['BacklashNonlinearity', 'backlash_nonlinearity',
            'backlash_harmonics', 'unit_circle_frd', 'limit_cycles',
@@ -345,6 +346,9 @@ def unit_circle_frd(sys, omega=None, name=None):
         omega = np.linspace(1e-3, 1.0, 2000) * np.pi / dt
     else:
         omega = check_signal('omega', omega)
+        if omega.size < 2:                  # the FRD interpolates (smooth)
+            raise ValueError(f"omega must hold at least 2 frequencies; got "
+                             f"{omega.size}")
         if omega.min() <= 0 or omega.max() > np.pi / dt * (1 + 1e-12):
             raise ValueError(f"omega must lie in (0, pi/dt] = (0, "
                              f"{np.pi / dt:.6g}]; got [{omega.min():.6g}, "
@@ -507,6 +511,7 @@ def sandwich_limit_cycles(model, C, A=None, omega=None, output_mean=0.0,
         raise TypeError(f"model must be a sandwichctl.SandwichSystem; got "
                         f"{type(model).__name__}")
     check_discrete_siso_tf('C', C)
+    common_dt('model', model.dt, 'C', C.dt)
     F = backlash_nonlinearity(model.backlash, output_mean=output_mean)
     if A is None:
         v = F.output_mean
@@ -514,6 +519,13 @@ def sandwich_limit_cycles(model, C, A=None, omega=None, output_mean=0.0,
         half = max(half, 1e-6)
         A = np.geomspace(half * 1.001, half * 50, 300)
     H = ct.tf(model.L1 * C * model.L2, name='L1*C*L2')   # names the plot
+    with np.errstate(all='ignore'):
+        peak = np.max(np.abs(H(np.exp(1j * np.linspace(1e-3, np.pi, 64)))))
+    if not peak <= DATA_RANGE[1]:
+        raise ValueError(f"C's gain makes the loop L1 C L2 reach {peak:.3g} "
+                         f"on the unit circle, beyond what the describing "
+                         f"function can solve in double precision; check "
+                         f"C's units")
     return limit_cycles(H, F, A, omega=omega, refine=refine)
 
 

@@ -38,7 +38,8 @@ from ._options import OPTIONS, RECURSIVE, method_options
 from .result import IdentificationResult
 from ..model.sandwich import SandwichSystem, theta_labels
 from .._checks import (warn, IdentificationWarning, check_dt, check_order,
-                       check_signal, check_vector, check_finite)
+                       check_bool, check_data_scale, check_signal,
+                       check_vector, check_finite)
 
 __all__ = ['RecursiveIdentifier']
 
@@ -160,7 +161,7 @@ class RecursiveIdentifier:
                 f"{im}..{im + 3}); got {theta0[im:im + 4]}")
         self.theta0 = theta0
         self._theta = theta0.copy()
-        self.keep_history = keep_history
+        self.keep_history = check_bool('keep_history', keep_history)
         self._pad = padding(self._o)
         cap = self._pad + _CHUNK
         self._u, self._y = np.zeros(cap), np.zeros(cap)
@@ -226,6 +227,8 @@ class RecursiveIdentifier:
         """Process a block of samples; return their prediction errors."""
         u = check_signal('u', u)
         y = check_signal('y', y, length=u.size)
+        check_data_scale('u', u)
+        check_data_scale('y', y)
         if self.diverged_at is not None:
             raise RuntimeError(
                 f"the estimate diverged at sample {self.diverged_at}; create "
@@ -350,8 +353,15 @@ class RecursiveIdentifier:
         p = self._theta.size
         hist = (np.array(self._hist) if self._hist else np.zeros((0, p)))
         success = self.diverged_at is None and self.n_samples > 0
+        resets = self.counts.get('reset', 0)
         if self.n_samples == 0:
             message = "no samples processed yet: the model is theta0"
+        elif success and resets > self.n_samples / 2:
+            success = False         # the covariance never held: no learning
+            message = (f"processed {self.n_samples} samples, {resets} of "
+                       f"them resets of the covariance (its trace "
+                       f"overflowed): the estimate did not learn; scale u "
+                       f"and y towards order 1 (other units)")
         elif success:
             message = f"processed {self.n_samples} samples"
         else:

@@ -141,7 +141,12 @@ def save_model(model, path, metadata=None):
                          f"JSON cannot represent ({exc}); store them as "
                          f"strings or None") from None
     if hasattr(path, 'write'):
-        path.write(text + '\n')
+        try:
+            path.write(text + '\n')
+        except TypeError:                       # a binary file object
+            raise TypeError(f"path must be a file name or a file opened "
+                            f"in text mode ('w'); {_describe(path)} takes "
+                            f"bytes") from None
         return
     try:
         with open(os.fspath(path), 'w', encoding='utf-8') as f:
@@ -366,6 +371,8 @@ def _check_path(path, mode):
         raise TypeError(f"path must be a file name (str or os.PathLike) or "
                         f"an open text file; got {type(path).__name__} "
                         f"{_short(path)}")
+    if isinstance(path, (str, os.PathLike)) and not os.fspath(path):
+        raise ValueError("path is empty; pass the name of a .json file")
 
 
 def _file_error(exc, where, action):
@@ -375,11 +382,12 @@ def _file_error(exc, where, action):
         what = 'written by sw.save_model' if action == 'read' else 'to write'
         message = (f"path is a directory, not a model file: {where}; pass "
                    f"the name of a .json file {what}")
-    elif isinstance(exc, FileNotFoundError):
+    elif isinstance(exc, FileNotFoundError) and action == 'read':
         message = (f"path names no file: {where} does not exist; check the "
-                   f"name and the working directory ({os.getcwd()})"
-                   if action == 'read' else
-                   f"path is in a folder that does not exist: {where}; "
+                   f"name and the working directory ({os.getcwd()})")
+    elif isinstance(exc, FileNotFoundError) and not os.path.isdir(
+            os.path.dirname(os.fspath(exc.filename or '')) or '.'):
+        message = (f"path is in a folder that does not exist: {where}; "
                    f"create the folder first (os.makedirs)")
     else:
         message = (f"cannot {action} the model file {where} (path): "
