@@ -27,8 +27,9 @@ PID gains
 :math:`C(z) = k_p + k_i \frac{z}{z-1} + k_d \frac{(1-p)(z-1)}{z-p}`
 (derivative filtered by a pole p). For each (kp, kd, p) on a grid, the
 largest ki that keeps :math:`|1 + C P| \ge` `modulus_margin` at every
-frequency of a log grid reaching below the slowest pole is found in
-closed form (the constraint is quadratic in ki at each frequency), and
+frequency of a log grid reaching below the slowest pole (denser where a
+long delay or a sharp resonance turns the phase fast, `frequency_grid`)
+is found in closed form (the constraint is quadratic in ki at each frequency), and
 the gains with the largest ki are kept, as in the MIGO designs of Åström
 and Hägglund: the integral gain is what rejects load disturbances. The
 complementary sensitivity is held at :math:`|T| \le 1` as well

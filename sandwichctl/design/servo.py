@@ -370,14 +370,14 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     The feedback is a PID on the model's linear part (a `SandwichSystem`'s
     :math:`\bar m L_1 L_2`), with the largest integral gain that keeps the
     modulus margin and a complementary sensitivity :math:`|T| \le 1` on a
-    log frequency grid reaching below the slowest pole (an integrating
-    plant gets a PD, see the module notes). Where a result's residuals
-    vouch for the model past eight plant bandwidths (little play), the
-    PID's gains are raised together as far as the margin allows, crossing
-    over below where they vouch (``ctrl.notes``). The poles are checked,
-    so an unstable design is never returned. The feedforward inverts the
-    model along the reference with ``preview`` samples of preview; for a
-    sandwich it contains the backlash inverse (see the module notes).
+    log grid from below the slowest pole, denser for long delays and sharp
+    resonances (an integrating plant gets a PD: the module notes). Where a
+    result's residuals vouch for the model past eight plant bandwidths
+    (little play), the PID's gains are raised together as far as the
+    margin allows, crossing over below where they vouch (``ctrl.notes``).
+    The poles are checked: an unstable design is never returned. The
+    feedforward inverts the model along the reference with ``preview``
+    samples of preview; for a sandwich it holds the backlash inverse.
 
     Parameters
     ----------
