@@ -57,6 +57,21 @@ def test_divergence_warns_once_at_the_users_line():
     assert not re.search(r"\b_\w+", str(w.message))     # no private names
 
 
+def test_an_overflowing_backlash_or_inverse_warns():
+    # both returned infinities in silence (found by a fuzz of the API)
+    x = np.linspace(-3, 3, 500)
+    with pytest.warns(sw.SimulationWarning, match='from sample 0 on'):
+        v = sw.backlash_response(x, 1e308, 1e308, 0, 0)
+    assert not np.all(np.isfinite(v))
+    with pytest.warns(sw.SimulationWarning, match="inverse's output"):
+        sw.backlash_inverse_response(np.full(10, 1e308), 1e-10, 1e-10, 0.1,
+                                     0.1)
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        sw.backlash_response(x, 1, 1, 0.1, 0.1)
+        sw.backlash_inverse_response(x, 1, 1, 0.1, 0.1)
+
+
 def test_no_warning_for_a_stable_simulation():
     with warnings.catch_warnings():
         warnings.simplefilter('error')
