@@ -109,3 +109,14 @@ def test_a_drive_case_at_a_random_drive_sample_time():
     assert case.dt == d['dt']
     default = sw.data.drive_case(0, n=400)
     assert default.dt == sw.data.DRIVE_DT
+
+
+def test_an_input_offset_with_estimated_offsets_fails_without_a_crash():
+    # J'J of an enormous range: numpy's SVD did not converge inside the
+    # standard errors, and identify raised LinAlgError
+    case = sw.data.random_case(2, n=3000, snr=20)
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', sw.IdentificationWarning)
+        res = sw.identify(case.u + 500, case.y, **case.plant.orders,
+                          offsets='estimate')
+    assert not res.success

@@ -133,3 +133,34 @@ def test_a_failed_identification_warns_when_designed_from():
     # once, though the design's checks design again
     assert sum('not a success' in str(w.message) for w in got) == 1
     assert any('not a success' in note for note in ctrl.notes)
+
+
+def test_a_design_from_a_result_starts_at_rest():
+    # the design's checks run the controller around the model and left
+    # its memory there: the first step of a fresh design was not zero
+    from conftest import paper_data
+    plant, u, y = paper_data(2000, seed=5, snr=100)
+    res = sw.identify(u, y, **plant.orders)
+    for ctrl in (sw.servo_controller(res),
+                 sw.servo_controller(res, operating_point=(0.5, 2.0))):
+        assert not np.any(ctrl.state)
+        u0, y0 = ctrl.operating_point
+        first = ctrl.step(y0, y0)
+        ctrl.reset()
+        assert first == ctrl.step(y0, y0) == u0
+
+
+def test_a_result_about_offsets_warns_without_an_operating_point():
+    # its model is about the record's means: raw values fed to a design
+    # at (0, 0) tracked at a travel of error (a review's random case)
+    from conftest import paper_data
+    plant, u, y = paper_data(2000, seed=6)
+    res = sw.identify(u + 3.0, y + 5.0, **plant.orders, offsets='mean')
+    with pytest.warns(sw.IdentificationWarning, match='operating_point'):
+        sw.servo_controller(res)
+    u0, y0 = res.offsets['u'][0], res.offsets['y'][0]
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        ctrl = sw.servo_controller(res, operating_point=(u0, y0))
+        sw.servo_controller(sw.identify(u, y, **plant.orders))
+    assert ctrl.operating_point == (u0, y0)

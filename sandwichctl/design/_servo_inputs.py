@@ -8,8 +8,9 @@ import control as ct
 
 from . import _servo_design as sd
 from ..model.sandwich import SandwichSystem
-from .._checks import (DATA_RANGE, MAX_ORDER, check_finite, check_int,
-                       check_name, check_option, check_real)
+from .._checks import (DATA_RANGE, MAX_ORDER, IdentificationWarning,
+                       check_finite, check_int, check_name, check_option,
+                       check_real, warn)
 
 __all__ = []
 
@@ -23,6 +24,26 @@ def unwrap_model(model):
         _check_result(model)
         return inner, model
     return model, None
+
+
+def warn_offsets(result, operating_point):
+    """IdentificationWarning where `result` was identified about offsets
+    (``offsets='mean'`` or ``'estimate'``) and the design was given no
+    operating point: its model is about the offsets, and raw values of
+    that record fed to the controller would be off by them."""
+    offsets = getattr(result, 'offsets', None)
+    if not isinstance(offsets, dict) or tuple(operating_point) != (0, 0):
+        return
+    pairs = list(zip(offsets.get('u', ()), offsets.get('y', ())))
+    if not any(a or b for a, b in pairs):
+        return
+    u0, y0 = pairs[0]
+    warn(f"servo_controller: the result was identified with offsets="
+         f"{offsets.get('method')!r}, so its model is about (u0, y0) = "
+         f"({u0:.6g}, {y0:.6g}) of its {'first ' if len(pairs) > 1 else ''}"
+         f"record; pass operating_point=(u0, y0) to feed the controller "
+         f"raw values of that record (the default (0, 0) takes them as "
+         f"deviations from it)", IdentificationWarning)
 
 
 def _check_result(result):

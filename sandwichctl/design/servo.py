@@ -86,7 +86,7 @@ from ._servo_checks import (HARM, activity_ratio, feedback_checked,
                             feedforward_checked, helps_on_model, scalar_index)
 from ._servo_guard import guard_scalars
 from ._servo_inputs import (MAX_PREVIEW, check_options, check_plant_tf,
-                            unwrap_model)
+                            unwrap_model, warn_offsets)
 from ._servo_kernel import (pack, servo_step, servo_step_kept, servo_run,
                             adapt_index, rest_scalars, BAND, GUARD, INVERSE,
                             NSCALAR, IX_ADAPT, IX_BLEND, IX_GUARD, IX_SCALAR)
@@ -485,7 +485,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         (`error_bands` of ``sandwichctl.tools.residuals``; much play keeps
         it at 3), and up to 32 for a PID then raised. Given, it holds.
     operating_point : (float, float), optional
-        (u0, y0): raw units of u and y at the model's zero.
+        (u0, y0): raw units of u and y at the model's zero (for a result
+        identified with offsets, its ``res.offsets``).
     name : str, optional
         System name.
 
@@ -503,7 +504,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     Warns
     -----
     IdentificationWarning
-        If the model is an identification result that is not a success.
+        If the model is an identification result that is not a success,
+        or one identified about offsets with no operating point given.
 
     Examples
     --------
@@ -530,6 +532,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         check_options(modulus_margin, feedforward, feedforward_from,
                       feedback_from, adapt, crossover_limit, max_preview,
                       name, operating_point)
+    warn_offsets(result, (u0, y0))
     bands, relative, baseline = sdata.result_errors(result)
     response = sdata.measured_response(baseline, relative)
 
@@ -600,9 +603,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                                  inputs='e', outputs='u_fb'),
                   design_plant=P, crossover_limit=float(lim),
                   measured_response=sdata.measured_arrays(data, den),
-                  margins=dict(modulus=mmod, modulus_measured=mmeas,
-                               gain=gm, phase=pm,
-                               pole_radius=radius),
+                  margins=dict(modulus=mmod, modulus_measured=mmeas, gain=gm,
+                               phase=pm, pole_radius=radius),
                   operating_point=(u0, y0), feedforward_kind=feedforward,
                   _fb=_ss(C.num[0][0], C.den[0][0], dt))
     zero = _ss([0.0], [1.0], dt)
@@ -616,12 +618,10 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
             f"{', '.join(unused)} set the backlash compensation, and "
             + ("a linear model has none" if feedforward is not None else
                "feedforward=None turns it off") + ": leave them out")
-    pre = post = zero
+    pre = post = ps = other = zero
     lead, jump, band_fraction_out, smoothing_out = 0, 0, 0.0, 0.0
-    ps, adapts = zero, False
+    adapts, other_inv, blends, smooth, ratio = False, None, False, 0, None
     scal = rest_scalars(u0, y0)
-    other, other_inv, blends = zero, None, False
-    smooth, ratio = 0, None
     if feedforward is None:
         preview, lin_ff = 0, zero
         notes.append("no feedforward: feedback only")
@@ -767,8 +767,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         # the compensation must at least help on the model it came from
         sc = scalar_index(ctrl)
         ctrl._p[sc + BAND.start:sc + BAND.stop] = 0.0
-        ctrl.band_fraction = 0.0
-        ctrl._design['band_fraction'] = 0.0
+        ctrl.band_fraction = ctrl._design['band_fraction'] = 0.0
         ctrl._design['_scalars'][BAND] = 0.0
         ctrl._ix[IX_ADAPT] = ctrl._ix[IX_BLEND] = 0
         ctrl.adapts = ctrl._design['adapts'] = False
@@ -781,13 +780,14 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         with warnings.catch_warnings():     # a failed result: warned once
             warnings.simplefilter('ignore', IdentificationWarning)
             return servo_controller(source, **{**asked, **kw})
-    if checked and feedback_from == 'auto' and P is lin_model:
-        own = feedback_checked(ctrl, redo, model, mbar * model.L1 * model.L2,
-                               r)
-        if own is not None:
-            return own
-    if checked and feedforward_from == 'auto' and lin_model is not None:
+    own = (feedback_checked(ctrl, redo, model, mbar * model.L1 * model.L2,
+                            r) if checked and feedback_from == 'auto'
+           and P is lin_model else None)
+    if own is not None:
+        ctrl = own
+    elif checked and feedforward_from == 'auto' and lin_model is not None:
         ctrl = feedforward_checked(ctrl, redo, model, ff_model, r)
+    ctrl.reset()                # the checks ran it: it starts at rest
     return ctrl
 
 

@@ -60,7 +60,8 @@ def lm(st, phi, u, y, max_iter=100, tol=1e-10, *, m_min=1e-9, sp=False,
     free = slice(None) if fixed is None else ~np.asarray(fixed)
     phi = st.minimum_phase_start(phi)
     r, J, _ = st.jacobian(phi, u, y, sp)
-    cost = 0.5 * float(r @ r)
+    with np.errstate(over='ignore'):        # a start that overflows: inf
+        cost = 0.5 * float(r @ r)
     if not (np.isfinite(cost) and np.all(np.isfinite(J))):
         return OptimizeResult(
             phi=phi, cost=np.inf if not np.isfinite(cost) else cost, J=J,

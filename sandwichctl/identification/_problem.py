@@ -391,6 +391,8 @@ class Problem:
         finite = bool(np.all(np.isfinite(theta)) and np.isfinite(cost))
         labels = SandwichSystem.from_theta(
             theta, **self.orders).theta_labels
+        with np.errstate(over='ignore', invalid='ignore'):  # diverged: inf
+            white = whiteness(r)
         failed = verdict(
             finite=finite, stable=stable,
             converged=None if out.get('fallback') else out['converged'],
@@ -410,7 +412,7 @@ class Problem:
             linear=linear, significance=None if linear is None else
             backlash_significance(linear['cost'], cost, linear['n_params'],
                                   q, n),
-            whiteness=whiteness(r), converged=bool(out['converged']
+            whiteness=white, converged=bool(out['converged']
                                                    or out.get('fallback')),
             n_experiments=len(self.u))
         judge(res, failed)
@@ -437,10 +439,11 @@ class Problem:
         r = self.sign * self.sy * self.st.residuals(
             phi, [part / self.su for part in self.u_user],
             [self.sign * part / self.sy for part in self.y_user])
-        cost = 0.5 * float(r @ r)
-        denom = np.linalg.norm(y_all - y_all.mean())
-        fit = 100 * (1 - np.linalg.norm(r) / denom) if denom > 0 \
-            else -np.inf
+        with np.errstate(over='ignore', invalid='ignore'):   # diverged
+            cost = 0.5 * float(r @ r)
+            denom = np.linalg.norm(y_all - y_all.mean())
+            fit = 100 * (1 - np.linalg.norm(r) / denom) if denom > 0 \
+                else -np.inf
         return r, cost, fit
 
     def _std(self, out, theta):
@@ -451,7 +454,10 @@ class Problem:
         std = np.full(theta.size, np.inf)
         if np.all(np.isfinite(J)):
             with np.errstate(all='ignore'):
-                cov_phi = sigma2 * np.linalg.pinv(J.T @ J)
+                try:
+                    cov_phi = sigma2 * np.linalg.pinv(J.T @ J)
+                except np.linalg.LinAlgError:   # the SVD did not converge
+                    return std                  # (J'J of enormous range)
                 T = self.st.T * self.unit[:, None]
                 cov_model = cov_phi[:self.st.q, :self.st.q]
                 std = np.sqrt(np.clip(np.diag(T @ cov_model @ T.T), 0,
