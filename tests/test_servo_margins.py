@@ -36,9 +36,12 @@ def test_a_sharp_resonance_keeps_the_margin():
     assert near.size > 50 and np.max(np.diff(near)) < 1.1e-5
 
 
-def test_a_low_order_plant_keeps_the_log_grid():
+@pytest.mark.parametrize('poles', [
+    [0.9, 0.5 + 0.3j, 0.5 - 0.3j, 0.2, 0.0],
+    [0.99971, 0.5]])      # the log grid's first point a rounding below low
+def test_a_low_order_plant_keeps_the_log_grid(poles):
     # what the drives' models are: their designs do not move
-    den = np.real(np.poly([0.9, 0.5 + 0.3j, 0.5 - 0.3j, 0.2, 0.0]))
-    low = 1e-4
+    den = np.real(np.poly(poles))
+    low = min(1e-4, 0.1 * np.min(1 - np.abs(np.roots(den))))
     np.testing.assert_array_equal(
         frequency_grid(den), np.logspace(np.log10(low), np.log10(np.pi), 1500))

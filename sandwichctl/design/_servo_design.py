@@ -97,8 +97,10 @@ def frequency_grid(den, n=1500):
     for rj, aj in zip(r, angle):
         if 0 < 1 - rj < aj * step:          # a peak narrower than a step
             parts.append(aj + (1 - rj) * PEAK_OFFSETS)
-    w = np.concatenate(parts)
-    return np.unique(w[(w >= low) & (w <= np.pi)])
+    if len(parts) == 1:
+        return w
+    extra = np.concatenate(parts[1:])
+    return np.unique(np.r_[w, extra[(extra > w[0]) & (extra < w[-1])]])
 
 
 def series_length(zj):
