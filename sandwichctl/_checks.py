@@ -115,6 +115,15 @@ def warn(message, category=SandwichWarning):
     warnings.warn(message, category, stacklevel=user_stacklevel())
 
 
+def warn_overflow(values, what, why):
+    """SimulationWarning where `values` (the output of `what`) stop being
+    finite: from the first such sample, and `why` (cause and remedy)."""
+    bad = ~np.isfinite(values)
+    if bad.any():
+        warn(f"{what} overflows double precision from sample "
+             f"{int(np.flatnonzero(bad)[0])} on {why}", SimulationWarning)
+
+
 # ----------------------------------------------------------------------
 # Scalars
 # ----------------------------------------------------------------------

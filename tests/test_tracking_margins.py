@@ -43,5 +43,6 @@ def test_a_controller_from_feedback_prints_its_margins():
 def test_a_plant_of_too_many_poles_is_refused_with_the_remedy():
     # 200 samples of delay took 170 s in the grid search (900: 37 GiB)
     P = ct.tf([1.0], np.r_[1.0, -0.5, np.zeros(200)], 1)
-    with pytest.raises(ValueError, match='at most 100 poles.*servo_controller'):
+    with pytest.raises(ValueError,
+                       match='at most 100 poles.*servo_controller'):
         sw.tracking_controller(P)

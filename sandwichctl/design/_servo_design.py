@@ -29,11 +29,11 @@ PID gains
 largest ki that keeps :math:`|1 + C P| \ge` `modulus_margin` at every
 frequency of a log grid reaching below the slowest pole (denser where a
 long delay or a sharp resonance turns the phase fast, `frequency_grid`)
-is found in closed form (the constraint is quadratic in ki at each frequency), and
-the gains with the largest ki are kept, as in the MIGO designs of Åström
-and Hägglund: the integral gain is what rejects load disturbances. The
-complementary sensitivity is held at :math:`|T| \le 1` as well
-(:math:`\mathrm{Re}\,CP \ge -1/2`, also linear in ki): the loop never
+is found in closed form (the constraint is quadratic in ki at each
+frequency), and the gains with the largest ki are kept, as in the MIGO
+designs of Åström and Hägglund: the integral gain is what rejects load
+disturbances. The complementary sensitivity is held at :math:`|T| \le 1`
+as well (:math:`\mathrm{Re}\,CP \ge -1/2`, also linear in ki): the loop never
 amplifies a frequency of the reference. A peak of T is a lightly damped
 closed-loop mode, and on the physically simulated drives, where Coulomb
 friction damps the holds less than the model says, the largest-ki PID of

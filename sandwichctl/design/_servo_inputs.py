@@ -26,17 +26,24 @@ def unwrap_model(model):
     return model, None
 
 
-def warn_offsets(result, operating_point):
-    """IdentificationWarning where `result` was identified about offsets
-    (``offsets='mean'`` or ``'estimate'``) and the design was given no
-    operating point: its model is about the offsets, and raw values of
-    that record fed to the controller would be off by them."""
+def warn_result(result, operating_point):
+    """Whether `result` (an identification result, or None) failed, with
+    an IdentificationWarning if so, and another where it was identified
+    about offsets (``offsets='mean'`` or ``'estimate'``) and the design
+    was given no operating point: its model is about the offsets, and raw
+    values of that record fed to the controller would be off by them."""
+    failed = result is not None and not getattr(result, 'success', True)
+    if failed:
+        warn(f"servo_controller: designing from an identification result "
+             f"that is not a success ({getattr(result, 'message', '')}); "
+             f"check the model, or re-identify, before closing the loop",
+             IdentificationWarning)
     offsets = getattr(result, 'offsets', None)
     if not isinstance(offsets, dict) or tuple(operating_point) != (0, 0):
-        return
+        return failed
     pairs = list(zip(offsets.get('u', ()), offsets.get('y', ())))
     if not any(a or b for a, b in pairs):
-        return
+        return failed
     u0, y0 = pairs[0]
     warn(f"servo_controller: the result was identified with offsets="
          f"{offsets.get('method')!r}, so its model is about (u0, y0) = "
@@ -44,6 +51,7 @@ def warn_offsets(result, operating_point):
          f"record; pass operating_point=(u0, y0) to feed the controller "
          f"raw values of that record (the default (0, 0) takes them as "
          f"deviations from it)", IdentificationWarning)
+    return failed
 
 
 def _check_result(result):

@@ -79,7 +79,7 @@ from ..model.sandwich import SandwichSystem
 from .._checks import (check_discrete_siso_tf, check_nonnegative,
                        check_positive, check_signal, common_dt, check_dt,
                        check_finite, check_bool, check_name, check_label,
-                       check_labels, warn, SimulationWarning)
+                       check_labels, warn_overflow)
 
 __all__ = ['BacklashInverse', 'backlash_inverse', 'backlash_inverse_response',
            'causal_inverse']
@@ -193,11 +193,8 @@ def backlash_inverse_response(v_d, m1, m2, D1, D2, x_prev=0.0, v_prev=0.0,
     return_expected = check_bool('return_expected', return_expected)
     x, v_hat = np.empty_like(v_d), np.empty_like(v_d)
     _inverse_loop(v_d, m1, m2, D1, D2, width, x_prev, v_prev, x, v_hat)
-    if not np.all(np.isfinite(x)):
-        k = int(np.flatnonzero(~np.isfinite(x))[0])
-        warn(f"the inverse's output overflows double precision from sample "
-             f"{k} on (v_d / m1 or v_d / m2 beyond 1.8e308): rescale v_d or "
-             f"the slopes", SimulationWarning)
+    warn_overflow(x, "the inverse's output", "(v_d / m1 or v_d / m2 beyond "
+                  "1.8e308): rescale v_d or the slopes")
     return (x, v_hat) if return_expected else x
 
 

@@ -86,7 +86,7 @@ from ._servo_checks import (HARM, activity_ratio, feedback_checked,
                             feedforward_checked, helps_on_model, scalar_index)
 from ._servo_guard import guard_scalars
 from ._servo_inputs import (MAX_PREVIEW, check_options, check_plant_tf,
-                            unwrap_model, warn_offsets)
+                            unwrap_model, warn_result)
 from ._servo_kernel import (pack, servo_step, servo_step_kept, servo_run,
                             adapt_index, rest_scalars, BAND, GUARD, INVERSE,
                             NSCALAR, IX_ADAPT, IX_BLEND, IX_GUARD, IX_SCALAR)
@@ -94,7 +94,7 @@ from .loop import ss_arrays
 from ..model.sandwich import SandwichSystem
 from .._checks import (MAX_ORDER, PLAIN_REALS, IdentificationWarning,
                        check_finite, check_int, check_nonnegative,
-                       check_positive, check_real, check_signal, warn)
+                       check_positive, check_real, check_signal)
 
 
 __all__ = ['ServoController', 'servo_controller']
@@ -522,17 +522,12 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     asked = {k: v for k, v in locals().items() if k != 'model'}
     source = model
     model, result = unwrap_model(model)
-    if result is not None and not getattr(result, 'success', True):
-        warn(f"servo_controller: designing from an identification result "
-             f"that is not a success ({getattr(result, 'message', '')}); "
-             f"check the model, or re-identify, before closing the loop",
-             IdentificationWarning)
     band_by_default = band_fraction is None
     mm, adapt, crossover_limit, max_preview, name, (u0, y0) = \
         check_options(modulus_margin, feedforward, feedforward_from,
                       feedback_from, adapt, crossover_limit, max_preview,
                       name, operating_point)
-    warn_offsets(result, (u0, y0))
+    failed = warn_result(result, (u0, y0))
     bands, relative, baseline = sdata.result_errors(result)
     response = sdata.measured_response(baseline, relative)
 
@@ -754,7 +749,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                   notes=notes, _pre=pre, _post=post,
                   _linear=lin_ff,
                   _lead=int(lead), _scalars=np.array(scal, float))
-    if result is not None and not getattr(result, 'success', True):
+    if failed:
         notes.append("designed from an identification result that is not "
                      "a success: check the model first")
     ctrl = ServoController(design, name=name)

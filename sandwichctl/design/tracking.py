@@ -233,6 +233,7 @@ def tracking_controller(sys, feedforward=True, modulus_margin=0.6,
     w = frequency_grid(den)
     zw = np.exp(1j * w)
     P_w = np.polyval(num, zw) / np.polyval(den, zw)
+    I_w = zw / (zw - 1.0)                   # the integrator's response
     num_p = np.concatenate([np.zeros(den.size - num.size), num])
 
     def evaluate(kp, ki):
@@ -242,7 +243,7 @@ def tracking_controller(sys, feedforward=True, modulus_margin=0.6,
         # thousands of gains would take gigabytes at once
         sm = np.concatenate([
             np.min(np.abs(1.0 + (kp[a:a + 256, None] + ki[a:a + 256, None]
-                                 * zw / (zw - 1.0)) * P_w), axis=1)
+                                 * I_w) * P_w), axis=1)
             for a in range(0, kp.size, 256)])
         # characteristic polynomial (z - 1) den + ((kp + ki) z - kp) num
         char = (np.convolve([1.0, -1.0], den)[None, :]

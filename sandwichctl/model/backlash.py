@@ -43,7 +43,7 @@ import control as ct
 
 from .._checks import (check_positive, check_nonnegative, check_signal,
                        check_finite, check_bool, check_dt, check_name,
-                       check_label, check_labels, warn, SimulationWarning)
+                       check_label, check_labels, warn_overflow)
 
 __all__ = ['Backlash', 'backlash_response', 'INCREASE', 'MEMORY', 'DECREASE']
 
@@ -116,11 +116,8 @@ def backlash_response(x, m1, m2, D1, D2, x_prev=0.0, v_prev=0.0,
     v = np.empty_like(x)
     zones = np.empty(x.size, dtype=np.int8)
     _backlash_loop(x, m1, m2, D1, D2, x_prev, v_prev, v, zones)
-    if not np.all(np.isfinite(v)):
-        k = int(np.flatnonzero(~np.isfinite(v))[0])
-        warn(f"the backlash output overflows double precision from sample "
-             f"{k} on (m1 * x or m2 * x beyond 1.8e308): rescale x or the "
-             f"slopes", SimulationWarning)
+    warn_overflow(v, "the backlash output", "(m1 * x or m2 * x beyond "
+                  "1.8e308): rescale x or the slopes")
     return (v, zones) if return_zones else v
 
 

@@ -50,7 +50,7 @@ class Experiments(list):
             except TypeError:
                 raise TypeError(f"pairs must be a list of (u, y) pairs; got "
                                 f"{type(pairs).__name__}") from None
-            data = as_experiments(pairs, dt=_check_dt(dt))
+            data = as_experiments(pairs, dt=dt)
             pairs, dt = list(data), data.dt
         super().__init__(pairs)
         self.dt = dt
