@@ -338,3 +338,39 @@ def test_lagged_normal_equations_equal_the_jacobians(shape, offsets, sizes):
                                  offsets=offsets)
     for got, want in zip(new, ref):
         np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-13)
+
+
+def test_auto_refuses_an_integrator_that_a_zero_cancels():
+    """A non-integrating sandwich whose linear fit with an integrator puts
+    a zero at 1.0027 beside it (a drift term that turns the low-frequency
+    sign): 'auto' keeps the fit without, says why, and the loop designed
+    on it holds on the true plant."""
+    import sandwichctl as sw
+    case = sw.data.random_case(11, n=3000, snr=100)
+    res = identify_linear(case.u, case.y, 5, 5, 3, integrators='auto')
+    assert res.aic[1] < res.aic[0]          # the AIC alone takes it
+    assert res.integrators == 0 and res.success, res.message
+    assert "whose pole at z = 1 a zero at 1.00" in res.message
+    assert np.max(np.abs(np.roots(res.F))) < 1
+    # a plant with an integrator and a zero well inside: still found
+    rng = np.random.default_rng(3)
+    F = np.convolve([1, -1], [1, -0.5])
+    u, y, _ = _oe_data(rng, np.array([1.0, -0.8]), F, 1, 3000,
+                       noise_ratio=0.05)
+    res = identify_linear(u, y, 2, 2, 1, integrators='auto')
+    assert res.integrators == 1 and res.success, res.message
+    np.testing.assert_allclose(np.roots(res.B), [0.8], atol=0.02)
+
+
+def test_auto_with_a_cancelled_integrator_designs_a_loop_that_holds():
+    import warnings
+    import sandwichctl as sw
+    case = sw.data.random_case(11, n=3000, snr=100)
+    res = identify_linear(case.u, case.y, 5, 5, 3, dt=1,
+                          integrators='auto')
+    travel = np.std(case.y)
+    r = sw.servo_reference(0.01, travel)
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', sw.SimulationWarning)
+        y = sw.closed_loop_response(case.plant, r, sw.servo_controller(res))
+    assert np.max(np.abs(y.outputs[0])) < 3 * travel

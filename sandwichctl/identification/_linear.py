@@ -535,14 +535,42 @@ def wants_integrator(Ff):
     return bool(np.any((poles.real > 0.9) & (np.abs(poles.imag) < 0.1)))
 
 
+#: `cancelled_integrator`: a real zero closer to z = 1 than this
+#: fraction of the distance from 1 to the model's slowest other pole
+#: cancels its integrator over the model's own time scales
+DRIFT_RATIO = 0.1
+
+
+def cancelled_integrator(fit):
+    """The real zero of an integrating `fit_oe` result that cancels its
+    pole at z = 1, or None.
+
+    A zero z0 with |z0 - 1| < `DRIFT_RATIO` (1 - rho), rho the largest
+    modulus of the other poles, leaves the integrator a ramp that emerges
+    only long after the model's own dynamics have settled: a drift term
+    that the fit uses to follow the record, not evidence of an
+    integrator. Beyond 1 it also turns the model's low-frequency sign,
+    and a loop designed on it runs away on the plant.
+    """
+    zeros = np.roots(fit['B']) if np.size(fit['B']) > 1 else np.zeros(0)
+    zeros = zeros[np.abs(zeros.imag) < 1e-9].real
+    if not zeros.size:
+        return None
+    rho = max_root(fit['Ff']) if np.size(fit['Ff']) > 1 else 0.0
+    near = zeros[np.argmin(np.abs(zeros - 1.0))]
+    return float(near) if abs(near - 1.0) < DRIFT_RATIO * (1.0 - rho) \
+        else None
+
+
 def fit_oe_auto(us, ys, shape, integrators, *, max_iter=100, tol=1e-10,
                 offsets=False):
     """`fit_oe` with ``integrators`` an int or 'auto' (scaled data).
 
     'auto' fits 0 integrators, and 1 when `wants_integrator`, and keeps
-    the lower AIC. Returns (out, used, aic, text): the chosen fit, its
-    number of integrators, the AICs on the scaled data (None unless
-    'auto') and a sentence for the message.
+    the lower AIC, unless a zero cancels the integrator
+    (`cancelled_integrator`). Returns (out, used, aic, text): the chosen
+    fit, its number of integrators, the AICs on the scaled data (None
+    unless 'auto') and a sentence for the message.
     """
     kw = dict(max_iter=max_iter, tol=tol, offsets=offsets)
     if integrators != 'auto':
@@ -555,10 +583,15 @@ def fit_oe_auto(us, ys, shape, integrators, *, max_iter=100, tol=1e-10,
     if wants_integrator(out['Ff']):
         out1 = fit_oe(us, ys, shape, 1, **kw)
         aic[1] = float(n * np.log(max(out1['cost'], 1e-300)) + 2 * (p - 1))
-    used = int(aic[1] is not None and aic[1] <= aic[0])
+    better = aic[1] is not None and aic[1] <= aic[0]
+    drift = cancelled_integrator(out1) if better else None
+    used = int(better and drift is None)
     if used:
         out = out1
     text = (f"; integrators='auto' chose {used} (AIC 0: {aic[0]:.6g}, 1: "
             + ('skipped, no real pole > 0.9' if aic[1] is None
                else f"{aic[1]:.6g}") + ")")
+    if drift is not None:
+        text += (f"; not 1, whose pole at z = 1 a zero at {drift:.6g} "
+                 f"cancels (a drift term, not an integrator)")
     return out, used, aic, text
