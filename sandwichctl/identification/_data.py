@@ -17,8 +17,12 @@ and applies the offset choice:
 ``'estimate'``
     A constant output offset per experiment is estimated with the model
     (the sandwich has no bias term; an output offset is also the initial
-    position of an integrating plant). The data are used as given; an
-    input offset shifts x, which the backlash's two thresholds absorb.
+    position of an integrating plant). The input is used as given (an
+    input offset shifts x, which the backlash's two thresholds absorb);
+    the fits see each experiment's output less its first sample (where a
+    record from rest starts), so that they start near zero offset
+    wherever the sensor's zero is, and the offsets come back in the
+    user's coordinates.
 
 The result's ``offsets`` says what was done: the method, and per
 experiment the removed or estimated input and output offsets.
@@ -54,8 +58,33 @@ def prepare(u, y, dt, offsets):
         info['u'] = [float(part.mean()) for part in us]
         info['y'] = [float(part.mean()) for part in ys]
         us = [part - c for part, c in zip(us, info['u'])]
+    elif offsets == 'estimate':
+        # the fits start near zero offset whatever the user's: each
+        # experiment's output is taken from its first sample (the model's
+        # rest; where the output of an integrating plant starts), and
+        # `with_shift` adds it back to the estimated offsets
+        info['y'] = [float(part[0]) for part in ys]
+    if offsets != 'none':
         ys = [part - c for part, c in zip(ys, info['y'])]
     return us, ys, data.dt, info, offsets == 'estimate'
+
+
+def with_shift(info, estimated):
+    """The result's ``offsets``: `prepare`'s `info`, and with 'estimate'
+    the output offsets `estimated` on the shifted data (one per
+    experiment, or None where none were) moved back to the user's
+    output."""
+    if info['method'] != 'estimate' or estimated is None:
+        return dict(info)
+    return dict(info, y=[float(c + e) for c, e in zip(info['y'],
+                                                        estimated)])
+
+
+def input_offset(us):
+    """The largest |mean| / standard deviation of the input experiments
+    (see `result.INPUT_OFFSET`)."""
+    return max((abs(float(part.mean())) / float(np.std(part))
+                for part in us if np.std(part) > 0), default=0.0)
 
 
 def scale(x):

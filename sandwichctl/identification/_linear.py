@@ -249,8 +249,13 @@ def _lagged_normal(b, fp, v, yhat, r, nk, *, offsets):
 def _start(v, y, nb, m, nk, offsets=False):
     """ARX start, stabilised, B refitted, improved by Steiglitz-McBride
     (with `offsets`, a constant per experiment in every least-squares
-    fit and in the cost)."""
+    fit and in the cost; each experiment's output is taken from its
+    first sample, which the zeros before it then continue: a large output
+    offset otherwise makes a step there that the least squares chase)."""
     segs = _segs(y)
+    if offsets:
+        segs = [part - part[0] for part in segs]
+        y = segs
     b, fp = _arx(v, y, nb, m, nk, offsets)
     if not np.all(np.isfinite(fp)):
         fp = np.concatenate([[1.0], np.zeros(m)])

@@ -46,7 +46,7 @@ import time
 
 import numpy as np
 
-from ._data import prepare
+from ._data import prepare, with_shift
 from ._lm import lm
 from ._problem import Problem, unit_poles
 from ._starts import admissible, perturb
@@ -151,7 +151,8 @@ def refine(model, u, y=None, max_iter=100, tol=1e-10, n_starts=1,
         'options': dict(max_iter=max_iter, tol=tol, n_starts=n_starts,
                         spread=spread, m_min=m_min)})
     res.counts['starts'] = n_starts
-    res.offsets = dict(offset_info, **(res.get('offsets') or {}))
+    estimated = (res.get('offsets') or {}).get('y')
+    res.offsets = with_shift(offset_info, estimated)
     return res
 
 

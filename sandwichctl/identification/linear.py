@@ -37,8 +37,9 @@ import numpy as np
 import control as ct
 from scipy.optimize import OptimizeResult
 
-from ._data import prepare, scale, scaled
+from ._data import input_offset, prepare, scale, scaled, with_shift
 from ._linear import fit_oe_auto, fit_output, max_root, RADIUS
+from .result import INPUT_OFFSET, input_offset_text
 from .._checks import (check_int, check_positive, check_tolerance, check_dt,
                        serial_blas)
 from .._checks import check_data_scale
@@ -150,6 +151,22 @@ def _check_orders(n, nb, nf, nk, integrators):
             f"u and y have N = {n} samples, too few for nb + nf = {nb + nf} "
             f"parameters and nk = {nk}: need N >= 10 (nb + nf) + nk = {need}")
     return nb, nf, nk, integrators
+
+
+def _verdict(out, b, f, fit, choice, offset):
+    """(success, message) of a linear fit `out` with coefficients b, f in
+    the user's units, its `fit`, the sentence of the integrator `choice`
+    and the data's `input_offset`."""
+    finite = bool(np.all(np.isfinite(b)) and np.all(np.isfinite(f)))
+    stable = max_root(out['Ff']) < RADIUS
+    success = (finite and stable and out['converged'] and fit > 0
+               and not offset > INPUT_OFFSET)
+    message = out['message'] + choice
+    if out['converged'] and not fit > 0:
+        message += f"; fit {fit:.3g} % <= 0"
+    if offset > INPUT_OFFSET:
+        message = input_offset_text(offset) + f" [{message}]"
+    return success, message
 
 
 @serial_blas
@@ -265,18 +282,16 @@ def identify_linear(u, y=None, nb=None, nf=None, nk=1, dt=True,
     # rounded scaled copy, see `_data.scaled`)
     yhat = fit_output(out, exact, nk) * sy
     resid = y - yhat
+    if estimate:            # back to the user's output (`prepare`)
+        yhat = yhat + np.concatenate([np.full(part.size, c) for part, c
+                                      in zip(ys, offset_info['y'])])
     cost = 0.5 * (resid @ resid)
     denom = np.linalg.norm(y - y.mean())
     fit = 100 * (1 - np.linalg.norm(resid) / denom)
 
     model = oe_transfer_function(b, f, nk, dt, name)
 
-    finite = bool(np.all(np.isfinite(b)) and np.all(np.isfinite(f)))
-    stable = max_root(out['Ff']) < RADIUS
-    success = finite and stable and out['converged'] and fit > 0
-    message = out['message'] + choice
-    if out['converged'] and not fit > 0:
-        message += f"; fit {fit:.3g} % <= 0"
+    success, message = _verdict(out, b, f, fit, choice, input_offset(us))
     labels = ([f"b{j}" for j in range(1, nb + 1)]
               + [f"f'{i}" for i in range(1, m + 1)])
     return LinearIdentificationResult(
@@ -285,6 +300,5 @@ def identify_linear(u, y=None, nb=None, nf=None, nk=1, dt=True,
         theta=theta, std=std, theta_labels=labels, aic=aic, nit=out['nit'],
         elapsed=time.perf_counter() - start, success=bool(success),
         message=message, dt=dt, scales=(float(su), float(sy)),
-        offsets=dict(offset_info, y=list(out['offsets'] * sy)
-                     if estimate else offset_info['y']),
+        offsets=with_shift(offset_info, out['offsets'] * sy),
         n_experiments=len(us))

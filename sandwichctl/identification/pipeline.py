@@ -58,7 +58,7 @@ import warnings
 
 import numpy as np
 
-from ._data import prepare
+from ._data import input_offset, prepare, with_shift
 from ._long import is_long, long_search
 from ._options import OEOptions, RECURSIVE, method_options
 from ._predictor import padding, stable_and_finite
@@ -149,9 +149,12 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         not for integrating plants, whose drift it changes), and
         ``'estimate'`` fits a constant output offset per experiment with
         the data as given (also the initial position of an integrating
-        plant; ``'oe'`` only). The recursive methods take 'none' or
-        'mean'.
-        ``res.offsets`` says what was done.
+        plant; ``'oe'`` only; the result does not depend on the output's
+        zero). The recursive methods take 'none' or 'mean'.
+        ``res.offsets`` says what was done. With 'none' or 'estimate', an
+        input more than 20 of its standard deviations from zero is an
+        operating point that the model, from rest at u = 0, cannot start
+        from: the result is a failure that says so.
     initial_state : {'zero', 'estimate'}, optional
         ``'oe'`` only. ``'zero'`` (default): each experiment starts from
         rest. ``'estimate'``: the past values before each experiment's
@@ -284,10 +287,11 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         result = _identify_recursive(us[0], ys[0], orders, method, dict(
             theta0=theta0, dt=dt, refine=refine, progress=progress,
             name=name, options=opt.as_dict()))
-    result.offsets = dict(offset_info, **(result.get('offsets') or {}))
+    estimated = (result.get('offsets') or {}).get('y')
+    result.offsets = with_shift(offset_info, estimated)
     moving = _excitation(result.model, us)
     result.excitation = np.nan if moving is None else moving
-    judge(result, verdict(excitation=moving))
+    judge(result, verdict(excitation=moving, input_offset=input_offset(us)))
     return result
 
 

@@ -35,6 +35,10 @@ POORLY_DETERMINED = 0.5
 #: The data excite the backlash when the model's backlash is outside its
 #: memory zone in at least this share of the samples.
 MIN_EXCITATION = 0.01
+#: An experiment whose input mean is more than this many of its standard
+#: deviations from zero starts the model (from rest at u = 0) with a step
+#: far larger than the excitation, which the plant never had.
+INPUT_OFFSET = 20.0
 
 
 class Failure(NamedTuple):
@@ -48,7 +52,8 @@ class Failure(NamedTuple):
 def verdict(*, finite=None, stable=None, estimate=None, converged=None,
             zeros_at_bound=(), zero_radius=None, fit=None, min_fit=MIN_FIT,
             linear=None, cost_scaled=None, method='oe', std=None, theta=None,
-            labels=(), excitation=None, minimum_phase_bound=None):
+            labels=(), excitation=None, minimum_phase_bound=None,
+            input_offset=None):
     """The checks an identified model fails, in the order they are told.
 
     Every argument is one fact about the model; a fact left at None is
@@ -83,6 +88,9 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
     minimum_phase_bound : float
         With a minimum-phase L1, the bound a zero of L1 ended on (not
         fatal: told in the message).
+    input_offset : float
+        The largest |mean(u)| / std(u) of the experiments: above
+        `INPUT_OFFSET` the input sits at an operating point.
 
     Returns
     -------
@@ -121,6 +129,8 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
                            ": use method='oe', which starts from that "
                            "linear model (res.linear['model']) and is "
                            "never worse") + _held(linear))
+    if input_offset is not None and input_offset > INPUT_OFFSET:
+        fail('input_offset', input_offset_text(input_offset))
     if std is not None:
         ill = ~np.isfinite(std) | (std > POORLY_DETERMINED * np.maximum(
             np.abs(theta), 1e-3))
@@ -135,6 +145,14 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
                               f"circle (another delay q1, or "
                               f"minimum_phase=None, may suit them)", False)
     return failed
+
+
+def input_offset_text(ratio):
+    """The failure of an input at an operating point (`INPUT_OFFSET`)."""
+    return (f"the input sits {ratio:.3g} of its standard deviations from "
+            f"zero, and the model starts from rest at u = 0: the record "
+            f"would begin with a step it never had (remove the operating "
+            f"point: offsets='mean', or u - u0)")
 
 
 def _held_out_lines(held):

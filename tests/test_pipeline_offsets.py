@@ -1,0 +1,76 @@
+"""offsets='estimate' does not depend on where the output sits: the fits
+run on each experiment's output less its first sample, and the
+estimated offsets come back in the user's coordinates."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import sandwichctl as sw
+
+CASE = sw.data.random_case(3, n=3000, snr=100, integrating='L1')
+SPREAD = float(np.std(CASE.y))
+
+
+@pytest.mark.parametrize('level', [5.0, 50.0])
+def test_an_output_offset_moves_only_the_estimated_offset(level):
+    # at 50 spreads the free linear fit stopped at 2 %, the integrator was
+    # never tried, and the result said success with a fresh-data fit of 73
+    # against 96 to 99 without the offset
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', sw.IdentificationWarning)
+        runs = [sw.identify(CASE.u, CASE.y + c * SPREAD,
+                            **CASE.plant.orders, offsets='estimate')
+                for c in (0.0, level)]
+    base, moved = runs
+    assert base.success and moved.success
+    assert moved.integrators == base.integrators == {'L1': 1, 'L2': 0}
+    np.testing.assert_allclose(moved.theta, base.theta, rtol=1e-5,
+                               atol=1e-8 * np.max(np.abs(base.theta)))
+    assert moved.fit == pytest.approx(base.fit, abs=1e-6)
+    assert moved.offsets['y'][0] - base.offsets['y'][0] == pytest.approx(
+        level * SPREAD, rel=1e-6)
+    # the model from rest plus the offset reproduces the fit
+    yhat = moved.model.simulate(CASE.u).outputs + moved.offsets['y'][0]
+    assert sw.fit_percent(CASE.y + level * SPREAD, yhat) == pytest.approx(
+        moved.fit, abs=0.05)
+
+
+def test_the_linear_fit_and_its_output_are_in_the_users_coordinates():
+    o = CASE.orders
+    shape = dict(nb=o['nb'] + o['nd'] + 1, nf=o['na'] + o['nc'], nk=1,
+                 offsets='estimate')
+    level = 500 * SPREAD
+    base = sw.identify_linear(CASE.u, CASE.y, **shape)
+    moved = sw.identify_linear(CASE.u, CASE.y + level, **shape)
+    np.testing.assert_allclose(moved.F, base.F, atol=1e-6)
+    assert moved.fit == pytest.approx(base.fit, abs=1e-6)
+    np.testing.assert_allclose(moved.yhat, base.yhat + level, atol=1e-6 *
+                               level)
+    np.testing.assert_allclose(moved.residuals, CASE.y + level - moved.yhat,
+                               atol=1e-9 * level)
+    assert moved.offsets['y'][0] - base.offsets['y'][0] == pytest.approx(
+        level, rel=1e-6)
+
+
+@pytest.mark.parametrize('offsets', ['none', 'estimate'])
+def test_an_input_at_an_operating_point_is_not_a_success(offsets):
+    # u + 500 (1,200 of its spreads): the model from rest at u = 0 saw a
+    # step it never had; the fits beat the linear baselines (20 % against
+    # 6 %) and said success, with a fit on fresh data below zero
+    case = sw.data.random_case(2, n=3000, snr=20)
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', sw.IdentificationWarning)
+        res = sw.identify(case.u + 500, case.y, **case.plant.orders,
+                          offsets=offsets)
+    assert not res.success
+    assert res.message.startswith('the input sits 1.21e+03 of its standard')
+    assert "offsets='mean'" in res.message
+    lin = sw.identify_linear(case.u + 500, case.y, nb=5, nf=6, nk=1,
+                             offsets=offsets)
+    assert not lin.success and 'standard deviations from zero' in \
+        lin.message
+    ok = sw.identify_linear(case.u + 500, case.y, nb=5, nf=6, nk=1,
+                            offsets='mean')
+    assert ok.success, ok.message
