@@ -304,10 +304,13 @@ def _centred(exps):
     return out
 
 
-def _free_run_fit(model, exps):
-    """(fit %, sum of squared errors) of the free run from rest."""
-    y = np.concatenate(exps.y)
-    yhat = np.concatenate([_simulate(model, u, exps.dt) for u in exps.u])
+def _free_run_fit(model, exps, offsets=False):
+    """(fit %, sum of squared errors) of the free run from rest; with
+    `offsets` plus the least-squares constant of each experiment."""
+    runs = [_simulate(model, u, exps.dt) for u in exps.u]
+    if offsets:
+        runs = [run + np.mean(y - run) for run, y in zip(runs, exps.y)]
+    y, yhat = np.concatenate(exps.y), np.concatenate(runs)
     return fit_percent(y, yhat), float(np.sum((y - yhat) ** 2))
 
 
@@ -337,9 +340,13 @@ def select_structure(data, orders=None, delays=None, validation=None,
     (module documentation). Candidates that fail (``success`` False) are
     ranked after those that succeed.
 
-    The means of u and y are removed from every experiment, estimation
-    and validation alike, and every model is scored by its free-run
-    simulation from rest.
+    By default (``offsets='mean'``) the means of u and y are removed from
+    every experiment, estimation and validation alike, and every model is
+    scored by its free-run simulation from rest. That changes the drift
+    of an integrating plant; with ``offsets='estimate'`` the data are used
+    as given, every model is fitted with a constant output offset per
+    experiment, and scored by its free run from rest plus the best such
+    offset on each experiment (estimation and validation alike).
 
     Parameters
     ----------
@@ -369,7 +376,7 @@ def select_structure(data, orders=None, delays=None, validation=None,
         Further keyword arguments of `identify` (e.g. ``integrators``,
         ``method``, ``max_iter``); ``dt`` sets the sampling time of
         array data. ``integrators`` also applies to the linear rows.
-        ``offsets`` may only be 'mean', which is what is done.
+        ``offsets`` is 'mean' (the default) or 'estimate' (above).
         ``minimum_phase='L1'`` ranks sandwiches with a minimum-phase L1
         (the linear rows stay unconstrained; the title says so).
 
@@ -382,7 +389,10 @@ def select_structure(data, orders=None, delays=None, validation=None,
     Warns
     -----
     IdentificationWarning
-        If no candidate was identified successfully. The warnings of the
+        If no candidate was identified successfully; or, with
+        ``offsets='mean'``, if a model that succeeded has an integrator
+        (the removed means changed its drift: ``offsets='estimate'``
+        suits such data). The warnings of the
         identifications themselves are not repeated: each row keeps its
         own (``rows[i]['warnings']``) and the table notes which rows have
         some.
@@ -393,7 +403,7 @@ def select_structure(data, orders=None, delays=None, validation=None,
         If a grid is empty, has an entry of the wrong length or a
         negative or non-integer order or delay, or has more than
         `MAX_ROWS` structures; if `criterion` is unknown, ``offsets`` is
-        not 'mean' or ``minimum_phase`` is not None, False or 'L1'; if
+        neither 'mean' nor 'estimate', or ``minimum_phase`` is not None, False or 'L1'; if
         the data are invalid (see `as_experiments`), or
         validation data are sampled at another dt.
     TypeError
@@ -433,7 +443,10 @@ def select_structure(data, orders=None, delays=None, validation=None,
             f"around what the physics suggests")
     options = {k: v for k, v in identify_options.items()
                if k not in ('dt', 'offsets')}
-    est, val = _read(data, validation, identify_options.get('dt'))
+    offsets = identify_options.get('offsets', 'mean')
+    est, val = _read(data, validation, identify_options.get('dt'),
+                     centre=offsets == 'mean')
+    fitted = 'none' if offsets == 'mean' else offsets
     linears = []
     if include_linear:
         linears = list(dict.fromkeys(
@@ -442,11 +455,14 @@ def select_structure(data, orders=None, delays=None, validation=None,
     start = time.perf_counter()
     with progress_bar(progress, total=len(structures) + len(linears),
                       desc='select_structure') as bar:
-        rows = [_identify_row(s, est, options, bar) for s in structures]
+        rows = [_identify_row(s, est, dict(options, offsets=fitted), bar)
+                for s in structures]
         rows += [_linear_row(o, est, options.get('integrators', 'auto'),
-                             bar) for o in linears]
+                             fitted, bar) for o in linears]
     for row in rows:
-        _score(row, est, val, est.n_samples)
+        _score(row, est, val, est.n_samples, fitted == 'estimate')
+    if offsets == 'mean':
+        _warn_integrating(rows)
     _rank(rows, 'fit_validation' if val is not None else criterion,
           -1.0 if val is not None else 1.0)
     return StructureTable(rows, criterion, val is not None,
@@ -469,28 +485,27 @@ def _check_arguments(criterion, include_linear, progress, identify_options):
                         f"select_structure's own")
     check_minimum_phase(identify_options.get('minimum_phase'))
     offsets = identify_options.get('offsets', 'mean')
-    if not (isinstance(offsets, str) and offsets == 'mean'):
+    if not (isinstance(offsets, str) and offsets in ('mean', 'estimate')):
         raise ValueError(
             f"select_structure removes the means of u and y of every "
-            f"experiment (offsets='mean') and scores every model by its "
-            f"free run from rest on the same centred data; got offsets="
-            f"{offsets!r}. Remove offsets another way before the search if "
-            f"means do not suit the data")
+            f"experiment (offsets='mean') or fits a constant output offset "
+            f"per experiment ('estimate'), and scores every model alike; "
+            f"got offsets={offsets!r}")
     # every row would fail alike on a wrong identify option: refuse it
     # here, once, instead of ranking a table of failures
     options = {k: v for k, v in identify_options.items()
                if k not in ('dt', 'offsets', 'name', 'method')}
     given = {k: options.pop(k) for k in list(options)
              if k in ('theta0', 'refine') + OEOptions.ARGUMENTS}
-    _method_options(identify_options.get('method', 'oe'), options, 'mean',
+    _method_options(identify_options.get('method', 'oe'), options, offsets,
                     given)
 
 
-def _read(data, validation, dt):
+def _read(data, validation, dt, centre=True):
     """(estimation, validation or None) experiments (`as_experiments`),
-    with the sampling time `dt` if given, centred: the identifiers get the
-    centred data (so offsets='none' for them), and the scores are
-    computed on the same centred copies."""
+    with the sampling time `dt` if given, and with `centre` centred: the
+    identifiers get the centred data (so offsets='none' for them), and
+    the scores are computed on the same centred copies."""
     est = as_experiments(data)
     _varied('data', est)
     if dt is not None and dt is not True:      # True: not given
@@ -507,8 +522,10 @@ def _read(data, validation, dt):
         except (TypeError, ValueError) as err:
             raise type(err)(f"validation: {err}") from None
         _varied('validation', val)
-        val = _centred(type(val)(val, _same_dt(val.dt, est.dt)))
-    return _centred(est), val
+        val = type(val)(val, _same_dt(val.dt, est.dt))
+    if not centre:
+        return est, val
+    return _centred(est), None if val is None else _centred(val)
 
 
 def _varied(argname, exps):
@@ -529,12 +546,11 @@ def _identify_row(s, est, options, bar):
     o = dict(zip(_ORDER_KEYS + _DELAY_KEYS, s))
     label = f"sandwich {s[0]}/{s[1]}/{s[2]}/{s[3]}, q {s[4]}/{s[5]}"
     bar.set_postfix_str(label)
-    run = _run(lambda: identify(est, **o, dt=est.dt, offsets='none',
-                                **options), bar)
+    run = _run(lambda: identify(est, **o, dt=est.dt, **options), bar)
     return _row('sandwich', label, o, run)
 
 
-def _linear_row(shape, est, integrators, bar):
+def _linear_row(shape, est, integrators, offsets, bar):
     """The row of the linear output-error model shape = (nb, nf, nk)."""
     nb, nf, nk = shape
     o = dict(nb=nb, nf=nf, nk=nk)
@@ -542,7 +558,7 @@ def _linear_row(shape, est, integrators, bar):
     bar.set_postfix_str(label)
     run = _run(lambda: identify_linear(est, **o, dt=est.dt,
                                        integrators=integrators,
-                                       offsets='none'), bar)
+                                       offsets=offsets), bar)
     return _row('linear', label, o, run)
 
 
@@ -562,6 +578,24 @@ def _rank(rows, key, sign):
             "select_structure: no candidate was identified successfully; "
             "the table ranks them anyway (see rows[i]['message'] before "
             "using best_model)", IdentificationWarning, stacklevel=3)
+
+
+def _warn_integrating(rows):
+    """Warn when a model that succeeded on centred data integrates."""
+    def integrating(row):
+        res = row['result']
+        k = res.get('integrators') if res is not None else None
+        return bool(sum(k.values()) if isinstance(k, dict) else k)
+
+    found = [row['structure'] for row in rows
+             if row['success'] and integrating(row)]
+    if found:
+        warnings.warn(
+            f"select_structure: {', '.join(found)} integrate, and the "
+            f"means removed from u and y (offsets='mean') changed their "
+            f"drift, so their fits and ranks may mislead: "
+            f"offsets='estimate' uses the data as given",
+            IdentificationWarning, stacklevel=3)
 
 
 def _same_dt(dt, wanted):
@@ -599,14 +633,16 @@ def _row(kind, label, orders, run):
     return row
 
 
-def _score(row, est, val, n):
-    """Fill the fits and the criteria of a row from free-run simulations."""
+def _score(row, est, val, n, offsets=False):
+    """Fill the fits and the criteria of a row from free-run simulations
+    (with `offsets`, each experiment's least-squares output offset)."""
     if row['model'] is None:
         return
     try:
-        fit, sse = _free_run_fit(row['model'], est)
+        fit, sse = _free_run_fit(row['model'], est, offsets)
         if val is not None:
-            row['fit_validation'] = _free_run_fit(row['model'], val)[0]
+            row['fit_validation'] = _free_run_fit(row['model'], val,
+                                                  offsets)[0]
     except ValueError as err:                 # an unstable model
         row['success'] = False
         row['message'] = f"{row['message']}; {err}"
