@@ -612,6 +612,31 @@ def test_a_baseline_moving_the_other_way_is_not_designed_on():
     assert asked.design_plant is flipped
 
 
+def test_a_baseline_pinned_at_the_stability_boundary_is_not_designed_on():
+    """random_case(4)'s linear baseline stopped with a free pole at
+    0.999999 (its fit flags it); the PID designed on it had ki = 1e-7 and
+    tracked the true plant at 0.25 travels of RMS error, against 0.13 on
+    the sandwich's mbar L1 L2, which the default now takes."""
+    case = sw.data.random_case(4, n=3000, snr=100)
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', sw.IdentificationWarning)
+        res = sw.identify(case.u, case.y, **case.plant.orders)
+    assert res.success and res.linear['message'].startswith('pinned')
+    travel = np.std(case.y)
+    r = sw.servo_reference(0.01, travel)
+
+    def rms(ctrl):
+        y = sw.closed_loop_response(case.plant, r, ctrl).outputs[0]
+        return np.sqrt(np.mean((r - y) ** 2)) / travel
+
+    ctrl = sw.servo_controller(res)
+    assert any("pinned at the stability boundary (|p| = 0.99999" in n
+               for n in ctrl.notes)
+    asked = sw.servo_controller(res, feedback_from='baseline')
+    assert asked.ki < 1e-4 * ctrl.ki
+    assert rms(ctrl) < 0.6 * rms(asked)
+
+
 def test_a_feedforward_that_wrecks_the_model_loop_is_not_kept():
     """random_case(43, integrating=True): L1 integrates, so the default
     inverts the baseline, which fits 67 points below the sandwich; its

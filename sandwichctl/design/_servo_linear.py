@@ -75,7 +75,9 @@ def linear_part(model, result, lin_model, feedback_from, feedforward_from,
     or a crossover hundreds of times too slow; nor when the baseline's
     low-frequency gain has the sign opposite to the sandwich's (with an
     integrator in L1 and unequal slopes it can spend such a pair on the
-    drift too, and its PD then pushes the plant the wrong way)."""
+    drift too, and its PD then pushes the plant the wrong way); nor when
+    the baseline's fit stopped with a free pole pinned at the stability
+    boundary (`pinned`: its integral gain comes out near zero)."""
     for name, choice in (('feedback_from', feedback_from),
                          ('feedforward_from', feedforward_from)):
         if choice == 'baseline' and not isinstance(lin_model,
@@ -101,6 +103,13 @@ def linear_part(model, result, lin_model, feedback_from, feedforward_from,
             "move the output opposite ways at low frequency (the baseline "
             "spent a pole and zero near z = 1 on the play's drift), so "
             "linear part designed on the model's mbar L1 L2"), None
+    radius = pinned(lin_model)
+    if feedback_from == 'auto' and radius is not None:
+        return own, None, True, (
+            f"the result's linear baseline has a free pole pinned at the "
+            f"stability boundary (|p| = {radius:.7f}: its fit stopped "
+            f"there, asking for an integrator), so linear part designed on "
+            f"the model's mbar L1 L2"), None
     pid, fb_why = None, ''
     if feedback_from != 'model':
         try:
@@ -158,6 +167,21 @@ def cancel_unit_pair(sys):
     num = np.real(num[0] * np.poly(np.delete(zeros, i)))
     den = np.real(den[0] * np.poly(np.delete(poles, gone)))
     return ct.tf(num, den, sys.dt, name=sys.name), float(np.real(zeros[i]))
+
+
+#: a linear baseline's free pole beyond this radius is pinned at the
+#: stability boundary (as `identification._linear` flags it)
+PINNED = 1 - 1e-5
+
+
+def pinned(sys):
+    """The radius of `sys`'s largest pole inside the unit circle, not at
+    z = 1 (within 5e-7: an integrator; a pinned pole is 1e-6 or more
+    inside), when it is beyond `PINNED`, else None."""
+    poles = np.roots(tf_arrays(sys)[1])
+    radii = np.abs(poles[np.abs(poles - 1) > 5e-7])
+    inside = radii[(radii > PINNED) & (radii < 1)]
+    return float(inside.max()) if inside.size else None
 
 
 def integrates(block):

@@ -437,8 +437,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         cannot follow the drift that play puts through an integrator
         after it, and its baseline then has a crossover far too slow or
         the wrong sign; and when the baseline's low-frequency gain has the
-        sign opposite to the sandwich's; the feedforward then inverts the
-        sandwich's too; and when the baseline's feedback leaves the loop
+        sign opposite to the sandwich's, or its fit stopped with a free
+        pole pinned at the stability boundary; the feedforward then
+        inverts the sandwich's too; and when the baseline's feedback leaves the loop
         around :math:`\bar m L_1 L_2` unstable and, feedback alone, tracks
         the identified sandwich 1.25 times worse than one designed on it).
     adapt : bool, optional
