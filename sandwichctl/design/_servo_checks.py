@@ -3,7 +3,8 @@ model: that the band's compensation helps there (`helps_on_model`), that
 the linear feedforward does not wreck the loop (`feedforward_checked`),
 and that the feedback designed on the linear baseline does not either
 (`feedback_checked`). Each runs the loop around the identified model
-for `_servo_design.design_reference` travelling 20 of its bands. And how
+for `_servo_design.design_reference` travelling 20 of its bands (the
+first also for the record's own travel). And how
 much input activity one linear feedforward asks for against another
 (`activity_ratio`)."""
 
@@ -55,17 +56,20 @@ def loop_error(ctrl, model, r):
     return err if np.isfinite(err) else np.inf
 
 
-def helps_on_model(ctrl, model, r):
+def helps_on_model(ctrl, model, refs):
     """Whether the band offset does not make the RMS error of the loop
-    around the identified model `HARM` times worse, for the reference
-    r."""
-    errors = []
-    for scale in (1.0, 0.0):
-        trial = type(ctrl)(ctrl._design)
-        sc = scalar_index(trial)
-        trial._p[sc + BAND.start:sc + BAND.stop] *= scale
-        errors.append(loop_error(trial, model, r))
-    return errors[0] <= HARM * errors[1]
+    around the identified model `HARM` times worse, for each reference of
+    `refs` (None skipped)."""
+    for r in (r for r in refs if r is not None):
+        errors = []
+        for scale in (1.0, 0.0):
+            trial = type(ctrl)(ctrl._design)
+            sc = scalar_index(trial)
+            trial._p[sc + BAND.start:sc + BAND.stop] *= scale
+            errors.append(loop_error(trial, model, r))
+        if not errors[0] <= HARM * errors[1]:
+            return False
+    return True
 
 
 def feedforward_checked(ctrl, design, model, ff_model, r):

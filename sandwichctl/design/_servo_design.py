@@ -707,8 +707,29 @@ def design_reference(model, bands, dt):
         gain = abs(np.polyval(num, 1.0) / np.polyval(den, 1.0))
     band = 0.5 * (co['m1'] + co['m2']) * (co['D1'] + co['D2']) * gain
     travel = bands * band if np.isfinite(band) and band > 0 else 1.0
+    return reference_at(travel, dt)
+
+
+def reference_at(travel, dt):
+    """`servo_reference` travelling `travel`, sampled at dt (at most
+    0.01 s; 0.01 s without a sample time)."""
     return servo_reference(dt if dt is not True and dt <= 0.01 else 0.01,
                            travel)
+
+
+def record_reference(result, dt):
+    """`reference_at` the output spread of the record `result` was
+    identified on (the RMS of its residuals over 1 - fit / 100), or None
+    where the result does not tell."""
+    errors, fit = getattr(result, 'errors', None), getattr(result, 'fit',
+                                                           None)
+    if errors is None or fit is None or not np.size(errors):
+        return None
+    with np.errstate(all='ignore'):
+        spread = float(np.sqrt(np.mean(np.square(errors)))
+                       / (1 - fit / 100))
+    return reference_at(spread, dt) if np.isfinite(spread) and spread > 0 \
+        else None
 
 
 def blend(ps, other, chosen, model, dt, scal, notes):

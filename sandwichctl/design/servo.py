@@ -755,11 +755,13 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                      "a success: check the model first")
     ctrl = ServoController(design, name=name)
     # an identified sandwich's choices are checked around the model, for
-    # a reference travelling 20 of its bands
+    # a reference travelling 20 of its bands (and the compensation for
+    # one travelling as far as the record, which can be far less)
     checked = comp and result is not None
     r = sd.design_reference(model, 20, dt) if checked else None
     if checked and band_by_default and band_fraction > 0 and \
-            not helps_on_model(ctrl, model, r):
+            not helps_on_model(ctrl, model,
+                               [r, sd.record_reference(result, dt)]):
         # the compensation must at least help on the model it came from
         sc = scalar_index(ctrl)
         ctrl._p[sc + BAND.start:sc + BAND.stop] = 0.0
@@ -769,8 +771,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         ctrl.adapts = ctrl._design['adapts'] = False
         ctrl.blends = ctrl._design['blends'] = False
         notes.append(f"compensation turned off: with it, tracking on the "
-                     f"identified model itself was over {HARM:g} times "
-                     f"worse than without (pass band_fraction to force it)")
+                     f"identified model itself (20 bands, or the record's "
+                     f"travel) was over {HARM:g} times worse than without "
+                     f"(pass band_fraction to force it)")
 
     def redo(**kw):
         with warnings.catch_warnings():     # a failed result: warned once
