@@ -635,6 +635,11 @@ def test_a_baseline_pinned_at_the_stability_boundary_is_not_designed_on():
     asked = sw.servo_controller(res, feedback_from='baseline')
     assert asked.ki < 1e-4 * ctrl.ki
     assert rms(ctrl) < 0.6 * rms(asked)
+    # a feedforward asked of the baseline stays the baseline's
+    ff = sw.servo_controller(res, feedforward_from='baseline')
+    assert ff.ki == ctrl.ki
+    assert any("feedforward inverts the baseline: as asked" in n
+               for n in ff.notes)
 
 
 def test_a_feedforward_that_wrecks_the_model_loop_is_not_kept():

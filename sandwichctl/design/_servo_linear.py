@@ -90,26 +90,28 @@ def linear_part(model, result, lin_model, feedback_from, feedforward_from,
     if lin_model is None:
         return own, None, True, "linear part designed on the model's " \
             "mbar L1 L2", None
+    why = None
     if feedback_from == 'auto' and integrates(model.L2):
-        return own, None, True, (
-            "L2 integrates (the integrator after the play), which a linear "
-            "baseline cannot follow (it spends a slow pole and zero on the "
-            "play's drift), so linear part designed on the model's mbar L1 "
-            "L2"), None
-    if feedback_from == 'auto' and (low_frequency_sign(*tf_arrays(lin_model))
-                                    != low_frequency_sign(*tf_arrays(own))):
-        return own, None, True, (
-            "the result's linear baseline and the sandwich's mbar L1 L2 "
-            "move the output opposite ways at low frequency (the baseline "
-            "spent a pole and zero near z = 1 on the play's drift), so "
-            "linear part designed on the model's mbar L1 L2"), None
-    radius = pinned(lin_model)
-    if feedback_from == 'auto' and radius is not None:
-        return own, None, True, (
-            f"the result's linear baseline has a free pole pinned at the "
-            f"stability boundary (|p| = {radius:.7f}: its fit stopped "
-            f"there, asking for an integrator), so linear part designed on "
-            f"the model's mbar L1 L2"), None
+        why = ("L2 integrates (the integrator after the play), which a "
+               "linear baseline cannot follow (it spends a slow pole and "
+               "zero on the play's drift)")
+    elif feedback_from == 'auto' and (
+            low_frequency_sign(*tf_arrays(lin_model))
+            != low_frequency_sign(*tf_arrays(own))):
+        why = ("the result's linear baseline and the sandwich's mbar L1 L2 "
+               "move the output opposite ways at low frequency (the "
+               "baseline spent a pole and zero near z = 1 on the play's "
+               "drift)")
+    elif feedback_from == 'auto' and pinned(lin_model) is not None:
+        why = (f"the result's linear baseline has a free pole pinned at "
+               f"the stability boundary (|p| = {pinned(lin_model):.7f}: "
+               f"its fit stopped there)")
+    if why is not None:
+        why += ", so linear part designed on the model's mbar L1 L2"
+        if feedforward_from == 'baseline':      # asked: kept
+            return own, None, False, why + ("; feedforward inverts the "
+                                            "baseline: as asked"), lin_model
+        return own, None, True, why, None
     pid, fb_why = None, ''
     if feedback_from != 'model':
         try:

@@ -439,9 +439,10 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         the wrong sign; and when the baseline's low-frequency gain has the
         sign opposite to the sandwich's, or its fit stopped with a free
         pole pinned at the stability boundary; the feedforward then
-        inverts the sandwich's too; and when the baseline's feedback leaves the loop
-        around :math:`\bar m L_1 L_2` unstable and, feedback alone, tracks
-        the identified sandwich 1.25 times worse than one designed on it).
+        inverts the sandwich's too, unless `feedforward_from` is
+        'baseline'; and when the baseline's feedback leaves the loop around
+        :math:`\bar m L_1 L_2` unstable and, feedback alone, tracks the
+        identified sandwich 1.25 times worse than one designed on it).
     adapt : bool, optional
         Whether the band's gain g (the share compensated is
         ``band_fraction * g``, g = 1 at rest) is estimated online from the
@@ -756,7 +757,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     ctrl = ServoController(design, name=name)
     # an identified sandwich's choices are checked around the model, for
     # a reference travelling 20 of its bands (and the compensation for
-    # one travelling as far as the record, which can be far less)
+    # one travelling the record's output spread, which can be far less)
     checked = comp and result is not None
     r = sd.design_reference(model, 20, dt) if checked else None
     if checked and band_by_default and band_fraction > 0 and \
@@ -772,7 +773,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         ctrl.blends = ctrl._design['blends'] = False
         notes.append(f"compensation turned off: with it, tracking on the "
                      f"identified model itself (20 bands, or the record's "
-                     f"travel) was over {HARM:g} times worse than without "
+                     f"spread) was over {HARM:g} times worse than without "
                      f"(pass band_fraction to force it)")
 
     def redo(**kw):

@@ -19,10 +19,10 @@ and applies the offset choice:
     (the sandwich has no bias term; an output offset is also the initial
     position of an integrating plant). The input is used as given (an
     input offset shifts x, which the backlash's two thresholds absorb);
-    the fits see each experiment's output less its first sample (where a
-    record from rest starts), so that they start near zero offset
-    wherever the sensor's zero is, and the offsets come back in the
-    user's coordinates.
+    the fits see the output less the first experiment's first sample
+    (where a record from rest starts), so that they start near zero
+    offset wherever the sensor's zero is, and the offsets come back in
+    the user's coordinates.
 
 The result's ``offsets`` says what was done: the method, and per
 experiment the removed or estimated input and output offsets.
@@ -59,11 +59,13 @@ def prepare(u, y, dt, offsets):
         info['y'] = [float(part.mean()) for part in ys]
         us = [part - c for part, c in zip(us, info['u'])]
     elif offsets == 'estimate':
-        # the fits start near zero offset whatever the user's: each
-        # experiment's output is taken from its first sample (the model's
-        # rest; where the output of an integrating plant starts), and
-        # `with_shift` adds it back to the estimated offsets
-        info['y'] = [float(part[0]) for part in ys]
+        # the fits start near zero offset whatever the user's: the output
+        # is taken from the first experiment's first sample (the model's
+        # rest; where the output of an integrating plant starts), one
+        # constant for all, which leaves every fit (its spread about the
+        # mean of all the samples) as it was; `with_shift` adds it back
+        # to the estimated offsets
+        info['y'] = [float(ys[0][0])] * n_exp
     if offsets != 'none':
         ys = [part - c for part, c in zip(ys, info['y'])]
     return us, ys, data.dt, info, offsets == 'estimate'
@@ -81,9 +83,10 @@ def with_shift(info, estimated):
 
 
 def input_offset(us):
-    """The largest |mean| / standard deviation of the input experiments
-    (see `result.INPUT_OFFSET`)."""
-    return max((abs(float(part.mean())) / float(np.std(part))
+    """The largest |first sample| / standard deviation of the input
+    experiments: how far from u = 0, where the model starts at rest, a
+    record starts (see `result.INPUT_OFFSET`)."""
+    return max((abs(float(part[0])) / float(np.std(part))
                 for part in us if np.std(part) > 0), default=0.0)
 
 

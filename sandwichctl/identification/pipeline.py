@@ -152,9 +152,9 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         plant; ``'oe'`` only; the result does not depend on the output's
         zero). The recursive methods take 'none' or 'mean'.
         ``res.offsets`` says what was done. With 'none' or 'estimate', an
-        input more than 20 of its standard deviations from zero is an
-        operating point that the model, from rest at u = 0, cannot start
-        from: the result is a failure that says so.
+        input that starts more than 20 of its standard deviations from
+        zero sits at an operating point that the model, from rest at
+        u = 0, cannot start from: the result is a failure that says so.
     initial_state : {'zero', 'estimate'}, optional
         ``'oe'`` only. ``'zero'`` (default): each experiment starts from
         rest. ``'estimate'``: the past values before each experiment's

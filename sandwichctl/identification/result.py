@@ -35,9 +35,10 @@ POORLY_DETERMINED = 0.5
 #: The data excite the backlash when the model's backlash is outside its
 #: memory zone in at least this share of the samples.
 MIN_EXCITATION = 0.01
-#: An experiment whose input mean is more than this many of its standard
+#: An experiment whose input starts more than this many of its standard
 #: deviations from zero starts the model (from rest at u = 0) with a step
-#: far larger than the excitation, which the plant never had.
+#: far larger than the excitation, which the plant never had: the record
+#: sits at an operating point.
 INPUT_OFFSET = 20.0
 
 
@@ -89,8 +90,8 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
         With a minimum-phase L1, the bound a zero of L1 ended on (not
         fatal: told in the message).
     input_offset : float
-        The largest |mean(u)| / std(u) of the experiments: above
-        `INPUT_OFFSET` the input sits at an operating point.
+        The largest |u[0]| / std(u) of the experiments: above
+        `INPUT_OFFSET` the record starts at an operating point.
 
     Returns
     -------
@@ -149,10 +150,10 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
 
 def input_offset_text(ratio):
     """The failure of an input at an operating point (`INPUT_OFFSET`)."""
-    return (f"the input sits {ratio:.3g} of its standard deviations from "
-            f"zero, and the model starts from rest at u = 0: the record "
-            f"would begin with a step it never had (remove the operating "
-            f"point: offsets='mean', or u - u0)")
+    return (f"the input starts {ratio:.3g} of its standard deviations "
+            f"from zero, and the model starts from rest at u = 0: the "
+            f"record would begin with a step it never had (remove the "
+            f"operating point: offsets='mean', or u - u0)")
 
 
 def _held_out_lines(held):

@@ -403,8 +403,8 @@ def select_structure(data, orders=None, delays=None, validation=None,
         If a grid is empty, has an entry of the wrong length or a
         negative or non-integer order or delay, or has more than
         `MAX_ROWS` structures; if `criterion` is unknown, ``offsets`` is
-        neither 'mean' nor 'estimate', or ``minimum_phase`` is not None, False or 'L1'; if
-        the data are invalid (see `as_experiments`), or
+        neither 'mean' nor 'estimate', or ``minimum_phase`` is not None,
+        False or 'L1'; if the data are invalid (see `as_experiments`), or
         validation data are sampled at another dt.
     TypeError
         If a grid is not a list or a dict, if `identify_options` sets the
