@@ -352,6 +352,14 @@ def test_auto_refuses_an_integrator_that_a_zero_cancels():
     assert res.integrators == 0 and res.success, res.message
     assert "whose pole at z = 1 a zero at 1.00" in res.message
     assert np.max(np.abs(np.roots(res.F))) < 1
+    # beyond 1, the whole distance to the slowest other pole: case 35's
+    # zero at 1.041 beside a pole at 0.93
+    case = sw.data.random_case(35, n=3000, snr=100)
+    o = case.orders
+    res = identify_linear(case.u, case.y, o['nb'] + o['nd'] + 1,
+                          o['na'] + o['nc'], o['q1'] + o['q2'] + 1,
+                          integrators='auto')
+    assert res.integrators == 0 and "a zero at 1.04" in res.message
     # a plant with an integrator and a zero well inside: still found
     rng = np.random.default_rng(3)
     F = np.convolve([1, -1], [1, -0.5])

@@ -542,7 +542,8 @@ def wants_integrator(Ff):
 
 #: `cancelled_integrator`: a real zero closer to z = 1 than this
 #: fraction of the distance from 1 to the model's slowest other pole
-#: cancels its integrator over the model's own time scales
+#: cancels its integrator over the model's own time scales; beyond 1
+#: (where it also turns the low-frequency sign) the whole distance
 DRIFT_RATIO = 0.1
 
 
@@ -555,7 +556,8 @@ def cancelled_integrator(fit):
     only long after the model's own dynamics have settled: a drift term
     that the fit uses to follow the record, not evidence of an
     integrator. Beyond 1 it also turns the model's low-frequency sign,
-    and a loop designed on it runs away on the plant.
+    and a loop designed on it runs away on the plant; there a zero
+    closer to 1 than the slowest other pole (z0 - 1 < 1 - rho) is one.
     """
     zeros = np.roots(fit['B']) if np.size(fit['B']) > 1 else np.zeros(0)
     zeros = zeros[np.abs(zeros.imag) < 1e-9].real
@@ -563,8 +565,8 @@ def cancelled_integrator(fit):
         return None
     rho = max_root(fit['Ff']) if np.size(fit['Ff']) > 1 else 0.0
     near = zeros[np.argmin(np.abs(zeros - 1.0))]
-    return float(near) if abs(near - 1.0) < DRIFT_RATIO * (1.0 - rho) \
-        else None
+    reach = (1.0 if near > 1.0 else DRIFT_RATIO) * (1.0 - rho)
+    return float(near) if abs(near - 1.0) < reach else None
 
 
 def fit_oe_auto(us, ys, shape, integrators, *, max_iter=100, tol=1e-10,

@@ -202,8 +202,9 @@ def identify_linear(u, y=None, nb=None, nf=None, nk=1, dt=True,
         integrator fit is skipped when the free model has no real pole
         above 0.9), except an integrator that a real zero of the fit
         nearly cancels (closer to z = 1 than a tenth of the distance from
-        1 to the slowest other pole): a drift term, not an integrator,
-        and the message says so.
+        1 to the slowest other pole; beyond 1, where it turns the
+        low-frequency sign, than that whole distance): a drift term, not
+        an integrator, and the message says so.
     max_iter : int, optional
         Maximum Levenberg-Marquardt iterations (default 100).
     tol : float, optional
