@@ -527,10 +527,16 @@ def check_discrete_siso_tf(name, sys):
 
 
 def common_dt(name1, dt1, name2, dt2):
-    """Return the common sampling time of two discrete systems."""
+    """Return the common sampling time of two discrete systems (equal to
+    rounding, 1e-9 relative, as python-control takes them: 0.1 * 3 and
+    0.3 are one sampling time; the first is returned)."""
     if dt1 is True:
         return dt2
     if dt2 is True or dt1 == dt2:
+        return dt1
+    both = all(isinstance(d, numbers.Real) and not isinstance(d, bool)
+               for d in (dt1, dt2))
+    if both and dt1 > 0 and abs(dt1 - dt2) <= 1e-9 * abs(dt1):
         return dt1
     raise ValueError(
         f"{name1} and {name2} must have the same sampling time; got "

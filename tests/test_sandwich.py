@@ -493,3 +493,16 @@ def test_simulate_response_owns_its_arrays():
     np.testing.assert_array_equal(resp.inputs, np.ones(5))
     np.testing.assert_array_equal(resp.time, 0.5 * np.arange(5))
     assert resp.outputs.shape == (5,)
+
+
+def test_sampling_times_equal_to_rounding_are_one():
+    """0.1 * 3 and 0.3 are one sampling time to python-control (its
+    product of the two blocks has one); a sandwich of them too."""
+    L1 = ct.tf([1.5, 0], [1, 0.1, 0.2], 0.1 * 3)
+    L2 = ct.tf([1, 0], [1, -0.5], 0.3)
+    assert (L1 * L2).dt == pytest.approx(0.3)
+    plant = sw.SandwichSystem(L1, sw.Backlash(1, 1, 0.1, 0.1), L2)
+    assert plant.dt == 0.1 * 3
+    with pytest.raises(ValueError, match='same sampling time'):
+        sw.SandwichSystem(L1, sw.Backlash(1, 1, 0.1, 0.1),
+                          ct.tf([1, 0], [1, -0.5], 0.3003))
