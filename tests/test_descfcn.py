@@ -200,3 +200,32 @@ def test_first_harmonic_of_a_sampled_sine():
 def test_bad_input(call, error, match):
     with pytest.raises(error, match=match):
         call()
+
+
+def test_a_refined_crossing_outside_the_amplitudes_scanned_is_not_kept():
+    """A helper's review: with C = 0.2 z / ((z - 1)(z - 0.9)) on the
+    paper's plant the refinement moved a crossing to amplitude -0.488.
+    The crossing of the scan stands there, and the loop around mbar L1 C
+    L2, unstable, is warned about; its simulation diverges and says so
+    instead of reporting a cycle of amplitude 7e65."""
+    model = sw.examples.paper_plant().normalized()
+    C = ct.tf([0.2, 0], np.polymul([1, -1], [1, -0.9]), 1)
+    with pytest.warns(sw.SimulationWarning, match='unstable'):
+        fine = sw.sandwich_limit_cycles(model, C)
+    with pytest.warns(sw.SimulationWarning, match='unstable'):
+        rough = sw.sandwich_limit_cycles(model, C, refine=False)
+    assert all(a > 0 for a, _ in fine.intersections)
+    assert len(fine.intersections) == len(rough.intersections) == 2
+    assert fine.intersections[0] == rough.intersections[0]
+    with pytest.warns(sw.SimulationWarning, match='diverges'):
+        amp, w, _ = sw.simulate_limit_cycle(model, C, n=3000, kick=0.5)
+    assert amp == np.inf and np.isnan(w)
+
+
+def test_a_loop_at_rest_has_no_limit_cycle():
+    """x settled to within 1e-16: rounding noise crossed its mean and was
+    reported as a cycle of amplitude 3e-17."""
+    model = sw.examples.paper_plant().normalized()
+    amp, w, _ = sw.simulate_limit_cycle(model, ct.tf([0.3], [1], 1),
+                                        n=6000, kick=2.0)
+    assert amp == 0.0 and np.isnan(w)

@@ -61,7 +61,8 @@ from .closedloop import TrackingController, closed_loop_response
 from .._checks import (DATA_RANGE, MOST_SAMPLES, check_finite,
                        check_nonnegative, check_positive, check_signal,
                        check_int, check_bool, check_name,
-                       check_discrete_siso_tf, common_dt)
+                       check_discrete_siso_tf, common_dt, warn,
+                       SimulationWarning)
 
 __all__ = ['BacklashNonlinearity', 'backlash_nonlinearity',
            'backlash_harmonics', 'unit_circle_frd', 'limit_cycles',
@@ -400,8 +401,22 @@ def limit_cycles(H, F, A, omega=None, refine=True):
     if H.isdtime(strict=True):
         H = unit_circle_frd(H, omega, name=H.name)
         omega = H.omega
-    return ct.describing_function_response(H, F, A, omega=omega,
+    resp = ct.describing_function_response(H, F, A, omega=omega,
                                            refine=refine, warn_nyquist=False)
+    if refine:
+        # the refinement can leave the amplitudes scanned (even for a
+        # negative one): there the crossing found on the scan stands
+        coarse = ct.describing_function_response(
+            H, F, A, omega=omega, refine=False,
+            warn_nyquist=False).intersections
+        if len(coarse) == len(resp.intersections):
+            resp.intersections = [
+                fine if A.min() <= fine[0] <= A.max() else rough
+                for fine, rough in zip(resp.intersections, coarse)]
+        else:
+            resp.intersections = [p for p in resp.intersections
+                                  if A.min() <= p[0] <= A.max()]
+    return resp
 
 
 def first_harmonic(signal, dt=1.0):
@@ -526,6 +541,15 @@ def sandwich_limit_cycles(model, C, A=None, omega=None, output_mean=0.0,
                          f"on the unit circle, beyond what the describing "
                          f"function can solve in double precision; check "
                          f"C's units")
+    # at large amplitudes the backlash passes x on with slope mbar
+    co = model.coefficients
+    radius = np.max(np.abs(ct.poles(ct.feedback(
+        0.5 * (co['m1'] + co['m2']) * H, 1))), initial=0.0)
+    if not radius < 1:
+        warn(f"sandwich_limit_cycles: the loop around mbar L1 C L2 is "
+             f"unstable (pole radius {radius:.4g}), so large oscillations "
+             f"grow without bound: a cycle predicted here is at most an "
+             f"unstable one", SimulationWarning)
     return limit_cycles(H, F, A, omega=omega, refine=refine)
 
 
@@ -554,7 +578,9 @@ def simulate_limit_cycle(plant, C, n=8000, kick=1.0, settle=None):
     -------
     amplitude : float
         First-harmonic amplitude of x; 0 if x does not cross its mean at
-        least three times after `settle` (no sustained oscillation).
+        least three times after `settle`, or swings by no more than
+        rounding (no sustained oscillation); inf, with a
+        SimulationWarning, if the loop diverges.
     omega : float
         Its frequency, rad per time unit (nan without oscillation).
     response : control.TimeResponseData
@@ -571,7 +597,16 @@ def simulate_limit_cycle(plant, C, n=8000, kick=1.0, settle=None):
     resp = closed_loop_response(plant, r, TrackingController.from_feedback(C))
     x = resp.outputs[2][settle:]
     s = x - x.mean()
-    if np.count_nonzero((s[:-1] < 0) & (s[1:] >= 0)) < 3:
+    half = s.size // 2
+    if not np.all(np.isfinite(x)) or np.ptp(x[half:]) > 10 * max(
+            np.ptp(x[:half]), 1e-300):
+        warn("simulate_limit_cycle: the loop diverges (x grows without "
+             "bound), so it has no limit cycle; amplitude inf",
+             SimulationWarning)
+        return math.inf, math.nan, resp
+    scale = np.max(np.abs(resp.outputs[2]))
+    if np.ptp(s) <= 1e-9 * scale or \
+            np.count_nonzero((s[:-1] < 0) & (s[1:] >= 0)) < 3:
         return 0.0, math.nan, resp          # no sustained oscillation
     amp, w, _ = first_harmonic(x, 1.0)
     dt = 1.0 if plant.dt is True else float(plant.dt)
