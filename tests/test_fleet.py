@@ -183,3 +183,26 @@ def test_client_without_dask_names_the_extra(datasets, monkeypatch):
     monkeypatch.setitem(sys.modules, 'distributed', None)
     with pytest.raises(ImportError, match=r'sandwichctl\[distributed\]'):
         sw.identify_many(datasets, **ORDERS, client=object())
+
+
+def test_a_pool_broken_twice_from_a_script_names_the_main_guard(
+        datasets, monkeypatch):
+    """A script without `if __name__ == '__main__':` has its workers
+    import it again; when the pool breaks twice the error says so (a
+    helper's review saw BrokenProcessPool in every slot, without a
+    word on the cause). The workers are not started here: the run on
+    the pool is replaced by one that breaks."""
+    from concurrent.futures import BrokenExecutor
+
+    def broken_run(pool, jobs, todo, outcomes, bar, **kw):
+        for i in todo:
+            outcomes[i] = BrokenExecutor('a child process terminated')
+        return True
+
+    monkeypatch.setattr(fleet, '_run_on', broken_run)
+    monkeypatch.setattr(sys.modules['__main__'], '__file__', 'script.py',
+                        raising=False)
+    out = sw.identify_many(datasets[:2], **ORDERS, processes=2,
+                           errors='return')
+    assert all(isinstance(r, BrokenExecutor) for r in out)
+    assert all("if __name__ == '__main__'" in str(r) for r in out)

@@ -44,6 +44,7 @@ import collections.abc
 import multiprocessing
 import os
 import signal
+import sys
 import threading
 import warnings
 from concurrent.futures import (BrokenExecutor, ProcessPoolExecutor,
@@ -100,7 +101,9 @@ def identify_many(datasets, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         Number of local worker processes, without `client`. Default: one
         per core (``os.cpu_count()``), at most one per data set.
         ``processes=1`` runs the data sets one after the other in this
-        process, with no pool.
+        process, with no pool. From a script, call it under ``if
+        __name__ == '__main__':``: the workers start by importing the
+        script again (Jupyter needs nothing).
     progress : bool, optional
         Show a progress bar (tqdm) over the data sets.
     errors : {'raise', 'return'}, optional
@@ -358,6 +361,12 @@ def _run_processes(jobs, orders, options, progress, processes):
                     if isinstance(outcomes[i], BrokenExecutor)]
             if not todo:
                 break
+    if getattr(sys.modules.get('__main__'), '__file__', None):
+        for i in todo:          # broken twice, from a script
+            outcomes[i] = BrokenExecutor(
+                f"{outcomes[i]} (the workers start by importing the "
+                f"calling script again: put the call under `if __name__ "
+                f"== '__main__':`)")
     return outcomes
 
 
