@@ -210,6 +210,30 @@ def test_any_plant_with_a_step_method_gives_the_same_loop():
     np.testing.assert_allclose(u, fast.outputs[1], atol=1e-10)
 
 
+def test_a_state_space_plant_and_a_one_element_measurement_are_taken():
+    """A discrete SISO StateSpace plant runs as its transfer function
+    does, and a step(u) that returns y as a one-element array (C @ x) is
+    read as y; both were refused (a helper's review)."""
+    P = ct.tf([0.5, 0.2], [1, -1.1, 0.3], 1)
+    ctrl = sw.servo_controller(P)
+    r = sw.steps_and_sines(600)
+    fast = sw.closed_loop_response(P, r, ctrl)
+    ss = sw.closed_loop_response(ct.ss(P), r, ctrl)
+    np.testing.assert_allclose(ss.outputs, fast.outputs, atol=1e-10)
+
+    class ArrayPlant(StepPlant):
+        def step(self, u):
+            super().step(u)
+            return self.ss.C @ self.x           # shape (1,)
+
+    arr = sw.closed_loop_response(ArrayPlant(P), r, ctrl)
+    np.testing.assert_allclose(arr.outputs, fast.outputs, atol=1e-10)
+    with pytest.raises(ValueError, match="at least one sample of delay"):
+        sw.closed_loop_response(ct.ss(-0.5, 1, 1, 1, 1), r, ctrl)
+    with pytest.raises(ValueError, match="discrete-time and SISO"):
+        sw.closed_loop_response(ct.ss(-0.5, 1, 1, 0), r, ctrl)
+
+
 @pytest.mark.parametrize('kw', [dict(band_fraction=0.3),
                                 dict(smoothing=0.01), dict(adapt=True),
                                 dict(jump_samples=3)])

@@ -134,10 +134,11 @@ def closed_loop_response(plant, reference, controller, compensator=None):
 
     Parameters
     ----------
-    plant : SandwichSystem, TransferFunction or object with step(u)
+    plant : SandwichSystem, TransferFunction, StateSpace or object with step(u)
         The (true) plant, with at least one sample of delay from u to y
-        (a TransferFunction or an object with ``step`` only with a
-        `ServoController`).
+        (a discrete SISO TransferFunction or StateSpace, or an object
+        whose ``step(u)`` returns y as a number or a one-element array,
+        only with a `ServoController`).
     reference : array_like, shape (N,)
         Reference r(0), ..., r(N-1).
     controller : ServoController or TrackingController
@@ -207,14 +208,22 @@ def _servo_response(plant, reference, ctrl, compensator):
     if compensator is not None:
         raise ValueError("a ServoController carries its own compensation; "
                          "pass compensator=None")
-    if isinstance(plant, (SandwichSystem, ct.TransferFunction)):
+    if isinstance(plant, ct.StateSpace):
+        if not (plant.isdtime(strict=True) and plant.issiso()):
+            raise ValueError(f"a StateSpace plant must be discrete-time and "
+                             f"SISO; got dt={plant.dt!r}, {plant.ninputs} "
+                             f"input(s), {plant.noutputs} output(s)")
+        lag = int(not np.any(plant.D))      # one sample of delay at least
+    if isinstance(plant, (SandwichSystem, ct.TransferFunction,
+                          ct.StateSpace)):
         if isinstance(plant, ct.TransferFunction):
             check_discrete_siso_tf('plant', plant)
         dt = common_dt('plant', plant.dt, 'controller', ctrl.dt)
-        lag = (plant.orders['q1'] + plant.orders['q2']
-               if isinstance(plant, SandwichSystem)
-               else plant.den[0][0].size - np.trim_zeros(
-                   plant.num[0][0], 'f').size)
+        if not isinstance(plant, ct.StateSpace):
+            lag = (plant.orders['q1'] + plant.orders['q2']
+                   if isinstance(plant, SandwichSystem)
+                   else plant.den[0][0].size - np.trim_zeros(
+                       plant.num[0][0], 'f').size)
         if lag < 1:
             raise ValueError("plant must have at least one sample of delay "
                              "from u to y: without it the loop is algebraic")
@@ -238,8 +247,8 @@ def _servo_response(plant, reference, ctrl, compensator):
         name = type(plant).__name__
     else:
         raise TypeError(
-            f"plant must be a SandwichSystem, a discrete TransferFunction or "
-            f"an object with a step(u) -> y method; got "
+            f"plant must be a SandwichSystem, a discrete TransferFunction "
+            f"or StateSpace, or an object with a step(u) -> y method; got "
             f"{type(plant).__name__}")
     r = check_signal('reference', reference)
     y, u = servo_loop(plant, r, ctrl)

@@ -92,7 +92,8 @@ def servo_loop(plant, r, ctrl):
     n = r.size
     y, u = np.empty(n), np.empty(n)
     ctrl.reset()
-    if isinstance(plant, (SandwichSystem, ct.TransferFunction)):
+    if isinstance(plant, (SandwichSystem, ct.TransferFunction,
+                          ct.StateSpace)):
         if isinstance(plant, SandwichSystem):
             bl = plant.backlash
             blocks = ss_arrays(plant.L1) + ss_arrays(plant.L2)
@@ -145,6 +146,8 @@ def _measured(value, call, k):
     """The float y a user plant's `call` returned for sample k."""
     if type(value) is float:
         return value
+    if isinstance(value, np.ndarray) and value.size == 1:
+        value = value.reshape(())[()]       # a one-element array: its y
     try:
         return check_real('y', value)
     except TypeError:
