@@ -43,6 +43,11 @@ MOST_SAMPLES = 10 ** 8
 MOST_ROUNDS = 100_000
 MOST_STARTS = 1000
 
+#: A free pole of a linear output-error fit beyond this radius is pinned
+#: at the stability boundary: the fit stopped there (the identifiers flag
+#: it; a servo design does not design on such a baseline).
+PINNED = 1 - 1e-5
+
 #: Peak magnitudes of data the identifiers accept: their least-squares
 #: costs are sums of squares (and of products of u and y), which overflow
 #: or underflow double precision far outside this range (1e200 does).

@@ -8,6 +8,7 @@ import numpy as np
 import control as ct
 
 from ..model.sandwich import SandwichSystem
+from .._checks import PINNED
 from .inverse import _fmt_roots
 from ._servo_design import (FF_ACTIVITY, RINGING, at_one, design_pid,
                             low_frequency_sign, series_length, tf_arrays)
@@ -102,10 +103,10 @@ def linear_part(model, result, lin_model, feedback_from, feedforward_from,
                "move the output opposite ways at low frequency (the "
                "baseline spent a pole and zero near z = 1 on the play's "
                "drift)")
-    elif feedback_from == 'auto' and pinned(lin_model) is not None:
+    elif feedback_from == 'auto' and (radius := pinned(lin_model)):
         why = (f"the result's linear baseline has a free pole pinned at "
-               f"the stability boundary (|p| = {pinned(lin_model):.7f}: "
-               f"its fit stopped there)")
+               f"the stability boundary (|p| = {radius:.7f}: its fit "
+               f"stopped there)")
     if why is not None:
         why += ", so linear part designed on the model's mbar L1 L2"
         if feedforward_from == 'baseline':      # asked: kept
@@ -169,11 +170,6 @@ def cancel_unit_pair(sys):
     num = np.real(num[0] * np.poly(np.delete(zeros, i)))
     den = np.real(den[0] * np.poly(np.delete(poles, gone)))
     return ct.tf(num, den, sys.dt, name=sys.name), float(np.real(zeros[i]))
-
-
-#: a linear baseline's free pole beyond this radius is pinned at the
-#: stability boundary (as `identification._linear` flags it)
-PINNED = 1 - 1e-5
 
 
 def pinned(sys):

@@ -208,22 +208,22 @@ def _servo_response(plant, reference, ctrl, compensator):
     if compensator is not None:
         raise ValueError("a ServoController carries its own compensation; "
                          "pass compensator=None")
-    if isinstance(plant, ct.StateSpace):
-        if not (plant.isdtime(strict=True) and plant.issiso()):
-            raise ValueError(f"a StateSpace plant must be discrete-time and "
-                             f"SISO; got dt={plant.dt!r}, {plant.ninputs} "
-                             f"input(s), {plant.noutputs} output(s)")
-        lag = int(not np.any(plant.D))      # one sample of delay at least
     if isinstance(plant, (SandwichSystem, ct.TransferFunction,
                           ct.StateSpace)):
-        if isinstance(plant, ct.TransferFunction):
+        if isinstance(plant, SandwichSystem):
+            lag = plant.orders['q1'] + plant.orders['q2']
+        elif isinstance(plant, ct.TransferFunction):
             check_discrete_siso_tf('plant', plant)
+            lag = plant.den[0][0].size - np.trim_zeros(plant.num[0][0],
+                                                       'f').size
+        else:
+            if not (plant.isdtime(strict=True) and plant.issiso()):
+                raise ValueError(
+                    f"a StateSpace plant must be discrete-time and SISO; "
+                    f"got dt={plant.dt!r}, {plant.ninputs} input(s), "
+                    f"{plant.noutputs} output(s)")
+            lag = int(not np.any(plant.D))   # a sample of delay, or none
         dt = common_dt('plant', plant.dt, 'controller', ctrl.dt)
-        if not isinstance(plant, ct.StateSpace):
-            lag = (plant.orders['q1'] + plant.orders['q2']
-                   if isinstance(plant, SandwichSystem)
-                   else plant.den[0][0].size - np.trim_zeros(
-                       plant.num[0][0], 'f').size)
         if lag < 1:
             raise ValueError("plant must have at least one sample of delay "
                              "from u to y: without it the loop is algebraic")

@@ -403,7 +403,8 @@ def limit_cycles(H, F, A, omega=None, refine=True):
         omega = H.omega
     resp = ct.describing_function_response(H, F, A, omega=omega,
                                            refine=refine, warn_nyquist=False)
-    if refine:
+    if refine and any(not A.min() <= a <= A.max()
+                      for a, _ in resp.intersections):
         # the refinement can leave the amplitudes scanned (even for a
         # negative one): there the crossing found on the scan stands
         coarse = ct.describing_function_response(

@@ -16,13 +16,13 @@ from scipy.optimize import least_squares
 from scipy.signal import lfilter
 
 from . import _predictor
+from .._checks import PINNED
 from ._problem import integrator_poly
 
 __all__ = []
 
 RADIUS = 1 - 1e-6        # free poles must satisfy |p| < RADIUS
 _START_RADIUS = 0.999     # reflected start poles are kept inside this
-_BOUNDARY = 1 - 1e-5      # a fit with a free pole beyond this is pinned
 _SM_ITER = 5              # Steiglitz-McBride iterations of the start
 #: Samples an experiment must have on average for `_lagged_normal`
 #: (with 600 experiments of 100 samples it took 358 ms against the
@@ -439,7 +439,7 @@ class _OutputError:
         converged, message = s['converged'], s['message']
         fp, yhat, cost = s['fp'], s['yhat'], s['cost']
         radius = max_root(fp)
-        if converged and radius > _BOUNDARY:
+        if converged and radius > PINNED:
             converged = False
             message = (f"pinned at the stability boundary: a free pole has "
                        f"|p| = {radius:.7f}; the data suggest an integrator "
