@@ -247,6 +247,30 @@ def test_divergence_is_reported_not_silent():
     assert res.history.shape[0] < u.size
 
 
+def test_reset_restarts_a_diverged_estimator_as_a_fresh_one():
+    """A diverged estimator refuses samples and says reset() restarts it;
+    after reset() it runs as a new one would, bit for bit, and a bad
+    theta0 leaves it as it was."""
+    plant, u, y = _paper_data(3000, seed=14)
+    est = sw.RecursiveIdentifier(**plant.orders, method='gradient', mu=5.0,
+                                 nonsmooth='subgradient')
+    with pytest.warns(sw.IdentificationWarning, match='diverged at sample'):
+        est.update_many(u, y)
+    with pytest.raises(RuntimeError, match=r'reset\(\) it'):
+        est.update(u[0], y[0])
+    with pytest.raises(ValueError, match='theta0 must have m1, m2 > 0'):
+        est.reset(theta0=np.zeros(plant.theta.size))
+    assert est.diverged_at is not None
+    est.reset(theta0=plant.theta)
+    fresh = sw.RecursiveIdentifier(**plant.orders, method='gradient',
+                                   mu=5.0, nonsmooth='subgradient',
+                                   theta0=plant.theta)
+    assert est.diverged_at is None and est.n_samples == 0
+    np.testing.assert_array_equal(est.update_many(u[:10], y[:10]),
+                                  fresh.update_many(u[:10], y[:10]))
+    np.testing.assert_array_equal(est.theta, fresh.theta)
+
+
 def test_result_plots_and_repr():
     plant, u, y = _paper_data(400, seed=15)
     res = sw.identify(u, y, **plant.orders, method='bundle')

@@ -671,7 +671,8 @@ def test_a_feedforward_that_wrecks_the_model_loop_is_not_kept():
     inverts the baseline, which fits 67 points below the sandwich; its
     inverse asked for inputs of +-650 and the loop on the plant ran 26
     travels of RMS error. Checked on the identified model against
-    feedback alone, it is dropped, and the notes say so."""
+    feedback alone, it is dropped, and the notes say so. Forced, its loop
+    around the model runs 16 times the record reference's peak: refused."""
     case = sw.data.random_case(43, snr=1e4, n=4000, integrating=True)
     with warnings.catch_warnings():
         warnings.simplefilter('ignore')
@@ -683,8 +684,10 @@ def test_a_feedforward_that_wrecks_the_model_loop_is_not_kept():
     out = sw.closed_loop_response(case.plant, r, ctrl)
     assert np.sqrt(np.mean((r - out.outputs[0]) ** 2)) < travel
     assert np.max(np.abs(out.outputs[1])) < 10
-    forced = sw.servo_controller(res, feedforward_from='baseline')
-    assert not any("feedback alone" in n for n in forced.notes)
+    # forced, it runs away around the model: refused, naming the keyword
+    with pytest.raises(ValueError, match="feedforward_from='baseline' as "
+                       "asked.*re-identify"):
+        sw.servo_controller(res, feedforward_from='baseline')
 
 
 def test_an_integrating_l1_gets_its_band_jump_spread_over_the_loop():
@@ -970,3 +973,29 @@ def test_the_blend_moves_towards_the_feedforward_that_fits_the_plant():
     assert err[1] < 0.8 * err[0]
     ctrl.reset()
     assert ctrl.feedforward_blend == 0.0
+
+
+def test_a_design_that_runs_away_around_its_own_model_is_moved_or_refused():
+    """random_case(51) with the integrator after the play: the PD designed
+    on mbar L1 L2 has its margins there, but its loop around the
+    identified sandwich ran away (2,100 times the reference's peak) and
+    on the plant (8,600 travels). The default moves the feedback to the
+    baseline, whose loop holds; forced onto mbar L1 L2 with its inverse,
+    it is refused."""
+    case = sw.data.random_case(51, n=2000, snr=100, integrating='L2')
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        res = sw.identify(case.u, case.y, **case.plant.orders)
+    assert res.success
+    ctrl = sw.servo_controller(res)
+    assert any("runs away" in n and "feedback_from='baseline' instead" in n
+               for n in ctrl.notes)
+    travel = float(np.std(case.y))
+    r = sw.servo_reference(0.01, travel, hold=1.0)
+    y = sw.closed_loop_response(case.plant, r, ctrl).outputs[0]
+    assert np.sqrt(np.mean((r - y) ** 2)) < travel
+    with pytest.raises(ValueError, match="runs away.*band_fraction=0.5, "
+                       "feedforward_from='model', feedback_from='model' "
+                       "as asked"):
+        sw.servo_controller(res, band_fraction=0.5, feedback_from='model',
+                            feedforward_from='model')

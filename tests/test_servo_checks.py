@@ -44,7 +44,12 @@ def test_a_baseline_loop_that_diverges_around_the_sandwich_gives_way(
         distorted):
     case, res = distorted
     ctrl = sw.servo_controller(res)
-    forced = sw.servo_controller(res, feedback_from='baseline')
+    # forced, its loop runs away around the model: refused ...
+    with pytest.raises(ValueError, match="runs away.*feedback_from="
+                       "'baseline' as asked"):
+        sw.servo_controller(res, feedback_from='baseline')
+    with sc.inner():                # ... and here made without that check
+        forced = sw.servo_controller(res, feedback_from='baseline')
     assert _radius_around_own(res.model, forced) > 1
     assert _radius_around_own(res.model, ctrl) < 1
     assert any("left the loop around the sandwich's mbar L1 L2 unstable"
@@ -120,3 +125,38 @@ def test_compensation_that_harms_at_the_records_travel_is_turned_off():
     for system in (plant, res.model):
         out = sw.closed_loop_response(system, r, ctrl).outputs[0]
         assert np.sqrt(np.mean((r - out) ** 2)) < 0.7 * travel
+
+
+@pytest.mark.parametrize('errors, picked', [
+    ({'first': 5.0}, 'first'),
+    ({'first': 50.0, 'baseline': 20.0, 'model': 3.0}, 'model'),
+    ({'first': 50.0, 'baseline': 20.0, 'model': 30.0}, None)])
+def test_a_loop_that_runs_away_around_the_model_moves_or_raises(
+        monkeypatch, errors, picked):
+    """`bounded_checked` keeps a design whose RMS error around the model
+    is at most `DIVERGED` (10) times the reference's peak, else takes the
+    first move that is, with a note, else raises naming what was asked
+    and tried."""
+    monkeypatch.setattr(sc, 'loop_error', lambda c, m, r: errors[c.label])
+    r = np.r_[0.0, 0.5, -1.0]
+
+    def design(**kw):
+        if kw.get('feedback_from') == 'nowhere':
+            raise ValueError("no baseline")
+        return _Ctrl(None, kw['feedback_from'])
+    moves = [dict(feedback_from=f) for f in ('nowhere', 'baseline',
+                                             'model')]
+    first = _Ctrl(None, 'first')
+    if picked is None:
+        with pytest.raises(ValueError, match=(
+                r"RMS error 50 times.*with band_fraction=0\.5 as asked; "
+                r"nor with feedback_from='nowhere' or feedback_from="
+                r"'baseline' or feedback_from='model'\. .*re-identify")):
+            sc.bounded_checked(first, design, None, r, moves,
+                               dict(band_fraction=0.5))
+        return
+    got = sc.bounded_checked(first, design, None, r, moves, {})
+    assert got.label == picked
+    assert (got.notes == [] if picked == 'first' else
+            "runs away" in got.notes[0]
+            and "feedback_from='model' instead" in got.notes[0])

@@ -1,7 +1,10 @@
 """What `servo_controller` accepts as its model: an identification
 result is unwrapped to its model, and a transfer function is checked for
 a design (discrete, SISO, strictly proper, stable or with one integrator,
-and a gain the design's squares do not overflow); and its options."""
+and a gain the design's squares do not overflow); its options; and the
+checks of `ServoController`'s per-sample inputs and output."""
+
+import math
 
 import numpy as np
 import control as ct
@@ -195,3 +198,23 @@ def check_options(modulus_margin, feedforward, feedforward_from,
                          f"{operating_point!r}")
     u0, y0 = (check_finite('operating_point', v) for v in operating_point)
     return mm, adapt, crossover_limit, max_preview, name, (u0, y0)
+
+
+def overflow(k):
+    """Raise for an input that overflowed the controller at sample k (the
+    caller has put its memory back)."""
+    where = '' if k is None else f" at sample {k}"
+    raise OverflowError(
+        f"u overflowed{where}: r_ahead or y is too large for the "
+        f"controller's gains (scale the data as the design's model was "
+        f"identified); the controller's memory is unchanged")
+
+
+def finite_inputs(t, u):
+    """(r_ahead, y) of python-control's input vector `u` at time t, as
+    floats; not finite raises, as `ServoController.step` does."""
+    r, y = float(u[0]), float(u[1])
+    if not (math.isfinite(r) and math.isfinite(y)):
+        raise ValueError(f"r_ahead and y must be finite; got r_ahead={r!r}, "
+                         f"y={y!r} at t={t!r}")
+    return r, y

@@ -72,6 +72,7 @@ reference moves, every 24 such reversals of the error r - y do. Scaling
 the error keeps the PID's states, so u does not jump.
 """
 
+import inspect
 import math
 import warnings
 
@@ -82,11 +83,13 @@ from . import _servo_design as sd
 from . import _servo_data as sdata
 from . import _servo_band as sb
 from . import _servo_linear as sl
-from ._servo_checks import (HARM, activity_ratio, feedback_checked,
-                            feedforward_checked, helps_on_model, scalar_index)
+from ._servo_checks import (HARM, activity_ratio, bounded_checked,
+                            feedback_checked, feedforward_checked,
+                            helps_on_model, inner, outermost, scalar_index)
 from ._servo_guard import guard_scalars
 from ._servo_inputs import (MAX_PREVIEW, check_options, check_plant_tf,
-                            unwrap_model, warn_result)
+                            unwrap_model, warn_result, finite_inputs,
+                            overflow)
 from ._servo_kernel import (pack, servo_step, servo_step_kept, servo_run,
                             adapt_index, rest_scalars, BAND, GUARD, INVERSE,
                             NSCALAR, IX_ADAPT, IX_BLEND, IX_GUARD, IX_SCALAR)
@@ -250,7 +253,7 @@ class ServoController(ct.NonlinearIOSystem):
         u = servo_step_kept(self._p, self._ix, self._s, self._keep, r, yk)
         if not math.isfinite(u):
             self._s[:] = self._keep
-            _overflow(None)
+            overflow(None)
         return u
 
     def run(self, r_ahead, y):
@@ -263,7 +266,7 @@ class ServoController(ct.NonlinearIOSystem):
         bad = np.flatnonzero(~np.isfinite(u))
         if bad.size:
             self._s[:] = keep
-            _overflow(int(bad[0]))
+            overflow(int(bad[0]))
         return u
 
     @property
@@ -296,13 +299,13 @@ class ServoController(ct.NonlinearIOSystem):
     # --- python-control system ----------------------------------------
     def _update(self, t, x, u, params=None):
         s = np.array(x, dtype=float)
-        servo_step(self._p, self._ix, s, *_finite_inputs(t, u))
+        servo_step(self._p, self._ix, s, *finite_inputs(t, u))
         return s
 
     def _output(self, t, x, u, params=None):
         s = np.array(x, dtype=float)
         return np.array([servo_step(self._p, self._ix, s,
-                                    *_finite_inputs(t, u))])
+                                    *finite_inputs(t, u))])
 
     def __reduce__(self):
         return (_rebuild, (self._design, self.name, self._s.copy(),
@@ -326,26 +329,6 @@ class ServoController(ct.NonlinearIOSystem):
         return head + ")\n" + "\n".join(f"  - {n}" for n in self.notes)
 
     __str__ = __repr__
-
-
-def _overflow(k):
-    """Raise for an input that overflowed the controller at sample k (the
-    caller has put its memory back)."""
-    where = '' if k is None else f" at sample {k}"
-    raise OverflowError(
-        f"u overflowed{where}: r_ahead or y is too large for the "
-        f"controller's gains (scale the data as the design's model was "
-        f"identified); the controller's memory is unchanged")
-
-
-def _finite_inputs(t, u):
-    """(r_ahead, y) of python-control's input vector `u` at time t, as
-    floats; not finite raises, as `ServoController.step` does."""
-    r, y = float(u[0]), float(u[1])
-    if not (math.isfinite(r) and math.isfinite(y)):
-        raise ValueError(f"r_ahead and y must be finite; got r_ahead={r!r}, "
-                         f"y={y!r} at t={t!r}")
-    return r, y
 
 
 def _rebuild(design, name, state, operating_point, labels=None):
@@ -501,7 +484,12 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     ValueError
         If the model is unstable (more than one integrator, or a pole
         outside the unit circle), has no delay, has a zero at z = 1, or
-        no PID meets the margin with a stable loop.
+        no PID meets the margin with a stable loop; or, for an
+        identification result, if the loop around its model runs away
+        for the record's travel (RMS error over 10 times the reference's
+        peak) with the keywords given, and with the feedback on the other
+        linear model where the feedback was left to choose (the notes
+        say when that choice was made).
 
     Warns
     -----
@@ -777,8 +765,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                      f"(pass band_fraction to force it)")
 
     def redo(**kw):
-        with warnings.catch_warnings():     # a failed result: warned once
-            warnings.simplefilter('ignore', IdentificationWarning)
+        with warnings.catch_warnings(), inner():  # a failed result: warned
+            warnings.simplefilter('ignore', IdentificationWarning)  # once
             return servo_controller(source, **{**asked, **kw})
     own = (feedback_checked(ctrl, redo, model, mbar * model.L1 * model.L2,
                             r) if checked and feedback_from == 'auto'
@@ -787,10 +775,20 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         ctrl = own
     elif checked and feedforward_from == 'auto' and lin_model is not None:
         ctrl = feedforward_checked(ctrl, redo, model, ff_model, r)
+    record = None if result is None else sd.record_reference(result, dt)
+    moves = ([dict(feedback_from=f) for f in ('baseline', 'model')]
+             if feedback_from == 'auto' and comp else [])
+    if record is not None and outermost():
+        given = {k: v for k, v in asked.items()
+                 if repr(v) != repr(_DEFAULTS[k])}
+        ctrl = bounded_checked(ctrl, redo, model, record, moves, given)
     ctrl.reset()                # the checks ran it: it starts at rest
     return ctrl
 
 
+#: servo_controller's defaults, for the keywords a user set
+_DEFAULTS = {k: p.default for k, p in
+             inspect.signature(servo_controller).parameters.items()}
 #: with an integrating L1, the band jump is spread over at least this many
 #: time constants 1/w_c of the loop's crossover (chosen on the tuning
 #: drives of benchmarks/bench_servo.py, where it cut the input activity and

@@ -140,6 +140,9 @@ class RecursiveIdentifier:
 
     def __init__(self, na, nb, nc, nd, q1=1, q2=1, method='bundle',
                  theta0=None, dt=True, keep_history=True, **options):
+        self._args = dict(na=na, nb=nb, nc=nc, nd=nd, q1=q1, q2=q2,
+                          method=method, dt=dt, keep_history=keep_history,
+                          **options)
         self.orders = {k: check_order(k, v) for k, v in
                        zip(('na', 'nb', 'nc', 'nd', 'q1', 'q2'),
                            (na, nb, nc, nd, q1, q2))}
@@ -192,6 +195,21 @@ class RecursiveIdentifier:
             self._weights = np.zeros(k1)
             self._work = [np.zeros(p) for _ in range(3)]
 
+    def reset(self, theta0=None):
+        """Start again, with no sample seen: from `theta0` (default: the
+        start given at construction), with the same orders, method and
+        options. A diverged estimate is restarted this way.
+
+        >>> import sandwichctl as sw
+        >>> est = sw.RecursiveIdentifier(na=1, nb=0, nc=1, nd=0)
+        >>> _ = est.update(1.0, 0.5)
+        >>> est.reset()
+        >>> est.n_samples, bool((est.theta == est.theta0).all())
+        (0, True)
+        """
+        self.__init__(**self._args, theta0=(self.theta0 if theta0 is None
+                                            else theta0))
+
     @property
     def _kinds_key(self):
         if (self.method == 'gradient'
@@ -231,8 +249,9 @@ class RecursiveIdentifier:
         check_data_scale('y', y)
         if self.diverged_at is not None:
             raise RuntimeError(
-                f"the estimate diverged at sample {self.diverged_at}; create "
-                f"a new estimator (smaller eta0/mu, or another theta0)")
+                f"the estimate diverged at sample {self.diverged_at}; "
+                f"reset() it, or create a new estimator (smaller eta0/mu, "
+                f"or another theta0)")
         errors = np.empty(u.size)
         done = 0
         with one_qp_warning():
