@@ -432,9 +432,14 @@ def main():
               f"{sum(row[7] >= 3 for row in mism)} of {len(mism)}; "
               f"sandwich RMS / linear: median {np.median(ratio):.2f}, "
               f"worst {max(ratio):.2f}")
+        quiet = [(f"{row[0]} {row[2]}", row[11]) for row in mism
+                 if max(row[11]) >= 3]
         print(f"  without the drives' torque disturbance (a limit cycle): "
               f"linear {sum(row[11][0] >= 3 for row in mism)}, sandwich "
-              f"{sum(row[11][1] >= 3 for row in mism)}")
+              f"{sum(row[11][1] >= 3 for row in mism)}"
+              + ("; reversals without, linear / sandwich: " + ", ".join(
+                  f"{name} ({q[0]} / {q[1]})" for name, q in quiet)
+                 if quiet else ""))
     if bands:
         print("\nSandwich RMS / linear at fixed band shares:\n")
         print_table(['case', 'play', 'default', 'RMS/lin',

@@ -506,3 +506,17 @@ def test_sampling_times_equal_to_rounding_are_one():
     with pytest.raises(ValueError, match='same sampling time'):
         sw.SandwichSystem(L1, sw.Backlash(1, 1, 0.1, 0.1),
                           ct.tf([1, 0], [1, -0.5], 0.3003))
+
+
+def test_python_control_poles_zeros_and_dcgain_of_a_sandwich():
+    """ct.poles and ct.zeros give L1's and L2's; ct.dcgain refuses with
+    the reason and names the linearised plant's gain instead."""
+    plant = sw.examples.paper_plant()
+    np.testing.assert_allclose(
+        np.sort_complex(ct.poles(plant)),
+        np.sort_complex(np.r_[ct.poles(plant.L1), ct.poles(plant.L2)]))
+    np.testing.assert_allclose(
+        np.sort_complex(ct.zeros(plant)),
+        np.sort_complex(np.r_[ct.zeros(plant.L1), ct.zeros(plant.L2)]))
+    with pytest.raises(TypeError, match="no single DC gain.*linearized"):
+        ct.dcgain(plant)
