@@ -162,7 +162,7 @@ def test_invalid_contents(key, value, message):
 def test_save_errors(tmp_path):
     plant = sw.examples.paper_plant()
     with pytest.raises(TypeError, match=r"model must be a sandwichctl."
-                                        r"SandwichSystem; got Backlash"):
+                                        r"SandwichSystem .*; got Backlash"):
         sw.save_model(sw.Backlash(1, 1, 0.5, 0.5), tmp_path / 'x.json')
     with pytest.raises(TypeError, match=r"metadata must be a dict; got "
                                         r"list"):
@@ -172,3 +172,27 @@ def test_save_errors(tmp_path):
     with pytest.raises(ValueError, match=r"NaN or infinity"):
         sw.save_model(plant, tmp_path / 'x.json',
                       metadata={'x': float('nan')})
+
+
+def test_a_result_is_saved_with_its_verdict_and_offsets():
+    """save_model of an identification result saves its model, and its
+    verdict, fits and offsets under metadata['identification'] (the
+    operating point a controller of the loaded model needs); a user key
+    of that name is refused rather than overwritten."""
+    plant = sw.examples.paper_plant()
+    u = sw.examples.paper_input(2000, seed=0)
+    res = sw.identify(u, plant.simulate(u).outputs - 1.5,
+                      **plant.orders, offsets='estimate')
+    buffer = io.StringIO()
+    sw.save_model(res, buffer, metadata={'axis': 'x'})
+    model, meta = sw.load_model(io.StringIO(buffer.getvalue()),
+                                return_metadata=True)
+    assert np.array_equal(model.theta, res.model.theta)
+    got = meta['identification']
+    assert meta['axis'] == 'x' and got['success'] is True
+    assert got['fit'] == res.fit and got['linear_fit'] == res.linear['fit']
+    assert got['offsets'] == {'method': 'estimate',
+                              'u': list(res.offsets['u']),
+                              'y': list(res.offsets['y'])}
+    with pytest.raises(ValueError, match="key 'identification'"):
+        sw.save_model(res, io.StringIO(), metadata={'identification': 1})

@@ -98,9 +98,14 @@ def save_model(model, path, metadata=None):
 
     Parameters
     ----------
-    model : SandwichSystem
+    model : SandwichSystem or IdentificationResult
         The model to save. Its coefficients and backlash parameters
-        are saved.
+        are saved. Given the result of `sw.identify`, its model is saved
+        and its summary goes into the metadata under 'identification':
+        'method', 'success', 'message', 'fit', 'linear_fit' and 'offsets'
+        (the operating point its model is about: 'u' and 'y', one value
+        per experiment, or None where the fit had none), so that a loaded
+        model is not taken out of its context.
     path : str, os.PathLike or file object
         Where to write; an open text file is written to and left open.
     metadata : dict, optional
@@ -131,6 +136,18 @@ def save_model(model, path, metadata=None):
     >>> loaded = sw.load_model(path)
     >>> bool((loaded.theta == plant.theta).all())
     True
+
+    A result keeps its verdict and offsets with the model:
+
+    >>> u = sw.examples.paper_input(2000, seed=0)
+    >>> res = sw.identify(u, plant.simulate(u).outputs + 2.0,
+    ...                   **plant.orders, offsets='estimate')
+    >>> sw.save_model(res, path)
+    >>> meta = sw.load_model(path, return_metadata=True)[1]
+    >>> meta['identification']['success']
+    True
+    >>> round(meta['identification']['offsets']['y'][0], 3)
+    2.0
     """
     _check_path(path, 'write')
     data = _to_dict(model, metadata)
@@ -228,8 +245,13 @@ def load_model(path, return_metadata=False):
 
 def _to_dict(model, metadata):
 
+    result = None
+    if isinstance(getattr(model, 'model', None), SandwichSystem) and \
+            not isinstance(model, SandwichSystem) and hasattr(model, 'fit'):
+        result, model = model, model.model
     if not isinstance(model, SandwichSystem):
-        raise TypeError(f"model must be a sandwichctl.SandwichSystem; got "
+        raise TypeError(f"model must be a sandwichctl.SandwichSystem (or "
+                        f"the result of sw.identify); got "
                         f"{type(model).__name__}")
     if metadata is None:
         metadata = {}
@@ -237,6 +259,12 @@ def _to_dict(model, metadata):
         raise TypeError(f"metadata must be a dict; got "
                         f"{type(metadata).__name__}")
     _check_metadata(metadata, 'metadata', set())
+    if result is not None:
+        if 'identification' in metadata:
+            raise ValueError("metadata must not have the key "
+                             "'identification' when saving a result: "
+                             "save_model writes the result's summary there")
+        metadata = {**metadata, 'identification': _summary(result)}
     co = model.coefficients
     name = model.name
     if name is None or re.match(r'^sys\[\d*\]$', name):
@@ -259,6 +287,32 @@ def _to_dict(model, metadata):
         'D1': float(co['D1']),
         'D2': float(co['D2']),
         'metadata': metadata,
+    }
+
+
+def _summary(result):
+    """What a result adds to the model's metadata: its verdict, fits and
+    the offsets its model is about (the operating point a controller
+    designed from the loaded model needs)."""
+    def number(v):
+        try:
+            v = float(v)
+        except (TypeError, ValueError):
+            return None
+        return v if math.isfinite(v) else None
+    linear = getattr(result, 'linear', None)
+    offsets = getattr(result, 'offsets', None)
+    return {
+        'method': str(getattr(result, 'method', '')),
+        'success': bool(getattr(result, 'success', False)),
+        'message': str(getattr(result, 'message', '')),
+        'fit': number(getattr(result, 'fit', None)),
+        'linear_fit': number(linear.get('fit')) if isinstance(linear, dict)
+        else None,
+        'offsets': None if not isinstance(offsets, dict) else {
+            'method': str(offsets.get('method')),
+            'u': [number(v) for v in np.atleast_1d(offsets.get('u', []))],
+            'y': [number(v) for v in np.atleast_1d(offsets.get('y', []))]},
     }
 
 
