@@ -100,7 +100,7 @@ def save_model(model, path, metadata=None):
     ----------
     model : SandwichSystem or IdentificationResult
         The model to save. Its coefficients and backlash parameters
-        are saved. Given the result of `sw.identify`, its model is saved
+        are saved. Given the result of `identify`, its model is saved
         and its summary goes into the metadata under 'identification':
         'method', 'success', 'message', 'fit', 'linear_fit' and 'offsets'
         (the operating point its model is about: 'u' and 'y', one value
