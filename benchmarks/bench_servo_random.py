@@ -16,8 +16,10 @@ with ``sw.identify`` (its true orders, defaults); each success gets
 and each design runs in closed loop on the true plant for
 ``sw.servo_reference(0.01, travel, hold=1.0)`` (the plant's sample read as
 10 ms), with the output's spread as the travel. It prints a row per
-design whose feedback the check moved to the sandwich's mbar L1 L2 and a
-row per default design whose RMS error exceeds one travel, and counts the
+design whose feedback the check moved to the sandwich's mbar L1 L2, a
+row per design that the check of `_servo_checks.bounded_checked` moved
+(its first loop ran away around the identified model), a row per
+default design whose RMS error exceeds one travel, and counts the
 designs refused (with their reasons) and those whose RMS error exceeds
 one travel.
 
@@ -40,6 +42,7 @@ VARIANTS = (('plain', {}), ('negative gain', dict(negative_gain=True)),
             ('integrator in L1', dict(integrating='L1')),
             ('integrator in L2', dict(integrating='L2')))
 MOVED = "left the loop around the sandwich's mbar L1 L2 unstable"
+RAN = "runs away for the record's travel"
 
 
 def rms_travels(plant, ctrl, r, travel):
@@ -75,7 +78,7 @@ def main():
     ap.add_argument('--seed0', type=int, default=0)
     args = ap.parse_args()
     start = time.perf_counter()
-    rows, poor, refused = [], [], []
+    rows, poor, refused, ran = [], [], [], []
     count = dict(cases=0, successes=0)
     worse = dict(default=0, before=0, linear=0)
     for seed in range(args.seed0, args.seed0 + args.seeds):
@@ -98,12 +101,17 @@ def main():
             if ctrl is not None:
                 e = rms_travels(case.plant, ctrl, r, travel)
                 moved = any(MOVED in note for note in ctrl.notes)
+                ran.extend([seed, label, note.split('; ')[-1], f"{e:.3g}"]
+                           for note in ctrl.notes if RAN in note)
                 e_before = e
                 if moved:
                     before, _ = design(res, feedback_from='baseline')
-                    e_before = rms_travels(case.plant, before, r, travel)
+                    # refused where its loop runs away around the model
+                    e_before = (np.inf if before is None else
+                                rms_travels(case.plant, before, r, travel))
                     rows.append([seed, label, f"{res.fit:.1f}",
                                  f"{res.linear['fit']:.1f}",
+                                 'refused' if before is None else
                                  f"{e_before:.3g}", f"{e:.3g}"])
                 worse['default'] += e > 1
                 worse['before'] += e_before > 1
@@ -121,6 +129,9 @@ def main():
           "mbar L1 L2 (the baseline's loop diverged around the sandwich):")
     print_table(['seed', 'variant', 'sandwich fit %', 'baseline fit %',
                  'feedback on baseline', 'default'], rows)
+    print("\ndesigns moved because the first ran away around the "
+          "identified model (`_servo_checks.bounded_checked`):")
+    print_table(['seed', 'variant', 'redesigned', 'default'], ran)
     print("\ndefault designs worse than one travel:")
     print_table(['seed', 'variant', 'sandwich fit %', 'baseline fit %',
                  'default', 'linear design', 'feedback on'], poor)
