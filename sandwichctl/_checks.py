@@ -12,10 +12,12 @@ users can filter them; `warn` issues one with the stack level of the
 user's own line.
 """
 
+import contextlib
 import functools
 import numbers
 import os
 import sys
+import threading
 import warnings
 
 import numpy as np
@@ -582,11 +584,50 @@ def progress_bar(enabled, **kwargs):
     notebook without ipywidgets sees no warning unless it shows progress;
     otherwise a disabled plain bar is returned (it does nothing).
     """
+    if isinstance(enabled, _SharedBar):
+        return enabled.part(kwargs.get('total') or 0)
     if enabled:
         from tqdm.auto import tqdm
         return tqdm(**kwargs)
     from tqdm import tqdm
     return tqdm(disable=True, **kwargs)
+
+
+@contextlib.contextmanager
+def shared_progress(task, n, desc):
+    """Within: the `n` searches that threads run at once on `task` (its
+    ``progress`` True) count on one bar, not on `n` bars that overwrite
+    one another's line; each search's `progress_bar` adds its total."""
+    if not (task.progress is True and n > 1):
+        yield
+        return
+    bar = progress_bar(True, total=0, desc=desc, leave=False)
+    task.progress = _SharedBar(bar)
+    try:
+        yield
+    finally:
+        task.progress = True
+        bar.close()
+
+
+class _SharedBar:
+    """A tqdm bar that threads share (`shared_progress`)."""
+
+    def __init__(self, bar):
+        self.bar, self.lock = bar, threading.Lock()
+
+    def part(self, total):
+        with self.lock:
+            self.bar.total += total
+            self.bar.refresh()
+        return self
+
+    def update(self, n=1):
+        with self.lock:
+            self.bar.update(n)
+
+    def close(self):
+        """One search's end: the bar stays until every search has ended."""
 
 
 def serial_blas(func):

@@ -340,3 +340,29 @@ def test_an_integrator_after_the_play_is_found_in_its_basin(seed):
     assert res.integrators == {'L1': 0, 'L2': 1}
     assert res.cost <= 1.01 * truth.cost
     assert res.success
+
+
+def test_concurrent_searches_count_on_one_progress_bar(monkeypatch):
+    """With progress=True, the integrator splits that threads search at
+    once (integrators='auto': none, L1, L2) count on one bar, each adding
+    its total, instead of each drawing its own over the others' line; the
+    fit is the one without a bar."""
+    from sandwichctl import _checks
+    from sandwichctl.identification import _search as module
+    made = []
+    real = _checks.progress_bar
+
+    def spy(enabled, **kw):
+        bar = real(enabled, **kw)
+        made.append((type(enabled).__name__, kw.get('desc'), bar))
+        return bar
+    monkeypatch.setattr(module, 'progress_bar', spy)
+    case = sw.data.random_case(3, n=2000, snr=100, integrating='L1')
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        with_bar = sw.identify(case.u, case.y, **case.orders, progress=True)
+        without = sw.identify(case.u, case.y, **case.orders)
+    np.testing.assert_array_equal(with_bar.theta, without.theta)
+    shared = [bar for kind, _, bar in made if kind == '_SharedBar']
+    assert len(shared) == 3 and all(b is shared[0] for b in shared)
+    assert shared[0].bar.total > 0 and shared[0].bar.n > 0

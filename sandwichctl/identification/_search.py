@@ -36,7 +36,7 @@ from ._starts import (splits, opened, random_start, recursive_start,
                       reintegrated, relocations, perturb, unsplit,
                       held_starts, holds)
 from .linear import oe_transfer_function
-from .._checks import progress_bar
+from .._checks import progress_bar, shared_progress
 from ..tools.residuals import band_errors, noise_level
 
 __all__ = []
@@ -187,15 +187,15 @@ def step3_integrators(task, linears):
     searches = {split: Search(task, lin, split)
                 for k, lin in linears.items()
                 for split in integrator_splits(k, task.orders, block)}
-    fits = _run_all(searches, task.workers)
+    with shared_progress(task, len(searches), 'identify: starts'):
+        fits = _run_all(searches, task.workers)
     free = (0, 0)
     if free in fits and len(fits) > 1:
         cheapest = min((s for s in fits if s != free),
                        key=lambda s: fits[s][1]['cost'])
         if fits[cheapest][1]['cost'] < fits[free][1]['cost']:
-            # the fit without an integrator nests the one with (a pole
-            # just inside z = 1): when it ended worse, it stopped in a
-            # poorer basin, so it restarts from the other one's model
+            # it nests the integrating fit (a pole just inside z = 1), so
+            # ending worse, it stopped in a poorer basin: restart from it
             fits[free] = _unintegrated(task, fits[free], fits[cheapest])
     n = sum(part.size for part in task.u)
 
@@ -235,7 +235,7 @@ def step3_integrators(task, linears):
 
 def _run_all(searches, workers):
     """{split: run} of `searches` on `workers` threads, an L2 integrator's
-    first (it adds step 5's filtered search): the same fits as on one."""
+    first (step 5 filters its search): the same fits as on one thread."""
     order = sorted(searches, key=lambda split: -split[1])
     got = dict(zip(order, ordered_map(lambda split: searches[split].run(),
                                       order, workers)))
