@@ -160,3 +160,15 @@ def test_a_loop_that_runs_away_around_the_model_moves_or_raises(
     assert (got.notes == [] if picked == 'first' else
             "runs away" in got.notes[0]
             and "feedback_from='model' instead" in got.notes[0])
+
+
+def test_the_keywords_named_as_asked_are_those_that_differ_from_defaults():
+    """A value equal to its default in another type (1 for 1.0, an array
+    for a tuple) is not reported as the user's choice."""
+    defaults = dict(modulus_margin=0.6, operating_point=(0.0, 0.0),
+                    feedback_from='auto', adapt=None, band_fraction=None)
+    asked = dict(modulus_margin=np.float64(0.6),
+                 operating_point=np.zeros(2), feedback_from='model',
+                 adapt=False, band_fraction=0.5)
+    assert sc.set_keywords(asked, defaults) == dict(
+        feedback_from='model', adapt=False, band_fraction=0.5)

@@ -195,6 +195,18 @@ def bounded_checked(ctrl, design, model, r, moves, given):
         f"feedback_from=, feedforward_from=)")
 
 
+def set_keywords(asked, defaults):
+    """The keywords of `asked` whose values differ from `defaults` (a
+    value equal to its default, as 1 for 1.0 or an array for a tuple, is
+    not one the user changed)."""
+    def same(value, default):
+        try:
+            return bool(np.array_equal(value, default))
+        except (TypeError, ValueError):
+            return False
+    return {k: v for k, v in asked.items() if not same(v, defaults[k])}
+
+
 def _words(kw):
     """Keywords as a call spells them."""
     return ", ".join(f"{k}={v!r}" for k, v in kw.items())

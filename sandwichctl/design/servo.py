@@ -85,7 +85,8 @@ from . import _servo_band as sb
 from . import _servo_linear as sl
 from ._servo_checks import (HARM, activity_ratio, bounded_checked,
                             feedback_checked, feedforward_checked,
-                            helps_on_model, inner, outermost, scalar_index)
+                            helps_on_model, inner, outermost, scalar_index,
+                            set_keywords)
 from ._servo_guard import guard_scalars
 from ._servo_inputs import (MAX_PREVIEW, check_options, check_plant_tf,
                             unwrap_model, warn_result, finite_inputs,
@@ -779,9 +780,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     moves = ([dict(feedback_from=f) for f in ('baseline', 'model')]
              if feedback_from == 'auto' and comp else [])
     if record is not None and outermost():
-        given = {k: v for k, v in asked.items()
-                 if repr(v) != repr(_DEFAULTS[k])}
-        ctrl = bounded_checked(ctrl, redo, model, record, moves, given)
+        ctrl = bounded_checked(ctrl, redo, model, record, moves,
+                               set_keywords(asked, _DEFAULTS))
     ctrl.reset()                # the checks ran it: it starts at rest
     return ctrl
 
