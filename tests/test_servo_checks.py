@@ -172,3 +172,22 @@ def test_the_keywords_named_as_asked_are_those_that_differ_from_defaults():
                  adapt=False, band_fraction=0.5)
     assert sc.set_keywords(asked, defaults) == dict(
         feedback_from='model', adapt=False, band_fraction=0.5)
+
+
+def test_the_checks_run_in_the_models_coordinates_whatever_the_zero():
+    """The checks run the design around the identified model, in its
+    deviation coordinates: an operating point of 130 record peaks (an
+    axis far from its encoder's zero) had the runaway check move the
+    feedback (RMS error 12 times the peak, from the first sample's jump
+    to y0). Now the design is the one at (0, 0), notes included."""
+    case = sw.data.random_case(2, n=2000, snr=100, integrating='L2')
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        res = sw.identify(case.u, case.y, **case.plant.orders)
+    peak = np.max(np.abs(_servo_design.record_reference(res, res.model.dt)))
+    at_zero = sw.servo_controller(res)
+    far = sw.servo_controller(res, operating_point=(0.0, 130 * peak))
+    assert far.notes == at_zero.notes
+    assert (far.kp, far.ki, far.kd, far.band_fraction) == (
+        at_zero.kp, at_zero.ki, at_zero.kd, at_zero.band_fraction)
+    assert far.operating_point == (0.0, 130 * peak)

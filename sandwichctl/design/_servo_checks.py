@@ -77,10 +77,17 @@ def activity_ratio(ff, other, r):
 
 def loop_error(ctrl, model, r):
     """RMS error of `ctrl` around `model` for the reference r (inf if the
-    loop blows up)."""
-    with np.errstate(all='ignore'), warnings.catch_warnings():
-        warnings.simplefilter('ignore')
-        y = servo_loop(model, r, ctrl)[0]
+    loop blows up), in the model's coordinates: the design's operating
+    point, the user's raw values, is set aside while it runs."""
+    keep = ctrl._design['operating_point']
+    ctrl._design['operating_point'] = (0.0, 0.0)    # servo_loop resets
+    try:
+        with np.errstate(all='ignore'), warnings.catch_warnings():
+            warnings.simplefilter('ignore')
+            y = servo_loop(model, r, ctrl)[0]
+    finally:
+        ctrl._design['operating_point'] = keep
+        ctrl.reset()
     err = float(np.sqrt(np.mean((r - y) ** 2)))
     return err if np.isfinite(err) else np.inf
 
