@@ -2,6 +2,7 @@
 
 import io
 import json
+import warnings
 
 import numpy as np
 import pytest
@@ -196,3 +197,20 @@ def test_a_result_is_saved_with_its_verdict_and_offsets():
                               'y': list(res.offsets['y'])}
     with pytest.raises(ValueError, match="key 'identification'"):
         sw.save_model(res, io.StringIO(), metadata={'identification': 1})
+
+
+def test_a_streamed_result_is_saved_without_fits():
+    """A RecursiveIdentifier's result has no fit: it is saved all the
+    same, its fits stored as None."""
+    plant = sw.examples.paper_plant()
+    u = sw.examples.paper_input(300, seed=2)
+    est = sw.RecursiveIdentifier(**plant.orders)
+    est.update_many(u, plant.simulate(u).outputs)
+    buffer = io.StringIO()
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        sw.save_model(est.result(), buffer)
+    model, meta = sw.load_model(io.StringIO(buffer.getvalue()),
+                                return_metadata=True)
+    assert np.array_equal(model.theta, est.theta)
+    assert meta['identification']['fit'] is None

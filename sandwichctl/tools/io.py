@@ -247,7 +247,7 @@ def _to_dict(model, metadata):
 
     result = None
     if isinstance(getattr(model, 'model', None), SandwichSystem) and \
-            not isinstance(model, SandwichSystem) and hasattr(model, 'fit'):
+            not isinstance(model, SandwichSystem):
         result, model = model, model.model
     if not isinstance(model, SandwichSystem):
         raise TypeError(f"model must be a sandwichctl.SandwichSystem (or "
