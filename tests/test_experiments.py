@@ -175,6 +175,21 @@ def test_a_pair_of_columns_is_one_experiment():
         np.testing.assert_array_equal(exps.y[0], y)
 
 
+def test_lists_of_arrays_for_u_and_y_say_how_to_give_experiments():
+    # identify([u1, u2], [y1, y2]) with records of different lengths
+    # raised numpy's "inhomogeneous shape" ValueError
+    u = np.random.default_rng(1).standard_normal(60)
+    y = np.cumsum(u)
+    for uu, yy in (([u, u[:40]], [y, y[:40]]), ([u, u], [y, y]),
+                   (u, [y, y])):
+        with pytest.raises(TypeError, match=r'list of \(u, y\) pairs'):
+            sw.as_experiments(uu, yy)
+    with pytest.raises(TypeError, match='lists of 2 arrays'):
+        sw.identify_linear([u, u[:40]], [y, y[:40]], nb=1, nf=1, nk=1)
+    # a plain list of numbers is still one signal
+    assert len(sw.as_experiments(list(u), list(y))) == 1
+
+
 def test_experiments_built_by_hand_are_checked_and_keep_their_dt():
     # the constructor took anything, and identify then read dt=True
     u = sw.examples.paper_input(400, seed=2)

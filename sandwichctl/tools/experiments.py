@@ -83,6 +83,14 @@ def _is_signal(value):
     return arr.ndim == 1 or (arr.ndim == 2 and arr.shape[1] == 1)
 
 
+def _nested(value):
+    """True for a list or tuple that holds arrays or sequences of more
+    than one sample (several signals, of equal lengths or not), not
+    numbers or the one-sample rows of a column."""
+    return (isinstance(value, (list, tuple)) and len(value) > 0
+            and any(np.ndim(v) > 0 and np.size(v) > 1 for v in value))
+
+
 def _time_step(t, where):
     t = np.asarray(t, dtype=float)
     if t.ndim != 1 or t.size < 2 or not np.all(np.isfinite(t)):
@@ -189,6 +197,11 @@ def as_experiments(u, y=None, dt=None):
         dt = u.dt                       # its own sampling time
     dt = _check_dt(dt)
     if y is not None:
+        if _nested(u) or _nested(y):
+            raise TypeError(
+                f"u and y are lists of {len(u) if _nested(u) else len(y)} "
+                f"arrays; give several experiments as one list of (u, y) "
+                f"pairs, e.g. [(u1, y1), (u2, y2)], without y")
         if isinstance(u, (ct.TimeResponseData, list, tuple)) and not \
                 np.ndim(u) == 1:
             raise TypeError("give either u and y as arrays, or one record "
