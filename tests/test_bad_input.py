@@ -76,7 +76,8 @@ def _circular():
 def _Result(**fields):
     """An object that passes for an identification result of PLANT."""
     import types
-    return types.SimpleNamespace(model=PLANT, success=True, **fields)
+    return types.SimpleNamespace(**{'model': PLANT, 'success': True,
+                                     **fields})
 
 
 class _DtPlant(_OddPlant):
@@ -87,18 +88,19 @@ class _DtPlant(_OddPlant):
         self.dt = dt
 
 
+class _ReadNotCallable(_OddPlant):
+    """A user plant whose `read` is a number, not a method."""
+    read = 0.0
+
+
+def _set_kp():
+    sw.servo_controller(PLANT).kp = 1e6
+
+
 def _nan_at(k, n=N):
     x = np.ones(n)
     x[k] = np.nan
     return x
-
-
-def _steps_to_overflow():
-    """Steps the paper plant's controller with inputs near the largest
-    float until its output overflows (the third step)."""
-    ctrl = sw.servo_controller(PLANT)
-    for _ in range(4):
-        ctrl.step(1e308, -1e308)
 
 
 def _file(tmp, name, content):
@@ -692,8 +694,9 @@ ROWS = [
      lambda t: sw.servo_controller(PLANT).run(U, U[:3]), VE, 'y'),
     ('ServoController-step',
      lambda t: sw.servo_controller(PLANT).step(0.0, np.nan), VE, 'finite'),
-    ('ServoController-step-overflow',
-     lambda t: _steps_to_overflow(), OverflowError, 'memory is unchanged'),
+    ('ServoController-step-huge',
+     lambda t: sw.servo_controller(PLANT).step(1e308, -1e308), VE,
+     'at most 1e\\+100.*memory is unchanged'),
     ('ServoController-step-huge-int',
      lambda t: sw.servo_controller(PLANT).step(10 ** 400, 0.0), VE,
      'r_ahead is too large'),
@@ -734,9 +737,26 @@ ROWS = [
     ('servo_controller-result-no-fits',
      lambda t: sw.servo_controller(_Result(linear={'model': L2 * L1})), VE,
      'feedforward_from'),
-    ('ServoController-run-overflow',
-     lambda t: sw.servo_controller(PLANT).run([1e308] * 4, [-1e308] * 4),
-     OverflowError, 'sample 2'),
+    ('servo_controller-result-errors-junk',
+     lambda t: sw.servo_controller(_Result(errors=['a', 'b'])), VE,
+     'model.errors'),
+    ('servo_controller-result-success-array',
+     lambda t: sw.servo_controller(_Result(success=np.ones(3, bool))), VE,
+     'model.success'),
+    ('servo_controller-result-fit-nan',
+     lambda t: sw.servo_controller(_Result(fit=np.nan, linear={})), VE,
+     'model.fit must be a number'),
+    ('ServoController-partial-design',
+     lambda t: sw.ServoController({'_fb': None}), TE, 'servo_controller'),
+    ('ServoController-kp-read-only', lambda t: _set_kp(), AttributeError,
+     'read-only'),
+    ('closed_loop_response-plant-read-not-callable',
+     lambda t: sw.closed_loop_response(_ReadNotCallable(0.0), U,
+                                       sw.servo_controller(PLANT)), TE,
+     'plant.read must be a method'),
+    ('ServoController-run-huge',
+     lambda t: sw.servo_controller(PLANT).run([0.0, 1e101], [0.0, 0.0]),
+     VE, 'at most 1e\\+100.*sample 1'),
     ('closed_loop_response-servo-plant-nan',
      lambda t: sw.closed_loop_response(_NanPlant(), U,
                                        sw.servo_controller(PLANT)), VE,

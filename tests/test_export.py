@@ -477,3 +477,13 @@ def test_any_model_name_gives_a_valid_comment(tmp_path):
     assert '*/ ?' not in text and '??' not in text
     subprocess.run([GCC, *FLAGS, '-o', str(tmp_path / 'odd.so'),
                     str(source)], check=True)
+
+
+def test_a_directory_under_the_home_is_expanded(tmp_path, monkeypatch):
+    # '~/fw' made a folder literally named '~' in the working directory
+    monkeypatch.setenv('HOME', str(tmp_path))
+    monkeypatch.chdir(tmp_path)
+    sw.export_c(sw.servo_controller(ct.tf([0.1], [1, -0.9], 0.01)), '~/fw',
+                name='axis')
+    assert (tmp_path / 'fw' / 'axis.c').is_file()
+    assert not (tmp_path / '~').exists()

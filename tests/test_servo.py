@@ -684,6 +684,10 @@ def test_a_feedforward_that_wrecks_the_model_loop_is_not_kept():
     out = sw.closed_loop_response(case.plant, r, ctrl)
     assert np.sqrt(np.mean((r - out.outputs[0]) ** 2)) < travel
     assert np.max(np.abs(out.outputs[1])) < 10
+    # the check's design without feedforward kept the user's max_preview,
+    # which feedforward=None refuses: every other value was refused
+    short = sw.servo_controller(res, max_preview=3)
+    assert short.preview <= ctrl.preview
     # forced, it runs away around the model: refused, naming the keyword
     with pytest.raises(ValueError, match="feedforward_from='baseline' as "
                        "asked.*re-identify"):

@@ -18,6 +18,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from ._servo_design import loop_radius, tf_arrays
+from ._servo_inputs import MAX_PREVIEW
 from ._servo_kernel import BAND, IX_SCALAR
 from .loop import servo_loop
 
@@ -28,7 +29,7 @@ HARM = 1.25
 #: `servo_controller`'s keywords of the same design with its feedback
 #: alone (no feedforward, hence no band compensation)
 FEEDBACK_ALONE = dict(feedforward=None, band_fraction=None, smoothing=None,
-                      jump_samples=None, adapt=None)
+                      jump_samples=None, adapt=None, max_preview=MAX_PREVIEW)
 #: a loop whose RMS error around the identified model exceeds this many
 #: times the reference's peak has diverged (on the random plants of
 #: benchmarks/bench_servo_random.py, seeds 0-49, every default design stays

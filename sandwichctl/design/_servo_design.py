@@ -45,6 +45,7 @@ loop is never returned.
 import numpy as np
 import control as ct
 
+from ..model._coefficients import tf_to_ss
 from .inverse import _fmt_roots
 from ._servo_kernel import ADAPT, BLEND
 from .references import servo_reference
@@ -679,7 +680,7 @@ def adaptation(num, den, C, post, band_x):
     E), with E the regressor's energy over the estimate's memory after
     one band jump of band_x through `post` (the band path, a state-space
     system): the prior is worth ADAPT_PRIOR jumps, whatever the units."""
-    PS = ct.feedback(ct.ss(ct.tf(num, den, C.dt)), ct.ss(C))
+    PS = ct.feedback(tf_to_ss(ct.tf(num, den, C.dt)), tf_to_ss(C))
     if np.any(np.asarray(PS.D) != 0) or band_x <= 0:
         return None
     steps = np.full(ADAPT_MEMORY, band_x)

@@ -10,6 +10,7 @@ import numpy as np
 import control as ct
 
 from . import _servo_design as sd
+from ._servo_kernel import servo_step
 from ..model.sandwich import SandwichSystem
 from .._checks import (DATA_RANGE, MAX_ORDER, IdentificationWarning,
                        check_finite, check_int, check_name, check_option,
@@ -60,10 +61,14 @@ def warn_result(result, operating_point):
 def _check_result(result):
     """ValueError naming the field of an identification result (or an
     object that passes for one) that the design cannot read."""
-    for key in ('residuals', 'yhat'):
+    for key in ('residuals', 'yhat', 'errors'):
         value = getattr(result, key, None)
         if value is not None:
             _arrays(f"model.{key}", [value], 1)
+    success = getattr(result, 'success', True)
+    if not isinstance(success, (bool, np.bool_)):
+        raise ValueError(f"model.success must be True or False; got "
+                         f"{success!r:.60}")
     linear = getattr(result, 'linear', None)
     if linear is None:
         return
@@ -79,8 +84,8 @@ def _check_result(result):
             ("model.linear['fit']", linear.get('fit'))]
     for where, value in fits + [("model.linear['noise']",
                                  linear.get('noise'))]:
-        if value is not None:
-            check_real(where, value)
+        if value is not None and np.isnan(check_real(where, value)):
+            raise ValueError(f"{where} must be a number; got nan")
     for key, count in (('error_bands', 2), ('relative_error', 3)):
         value = linear.get(key)
         if value is not None:
@@ -163,6 +168,13 @@ def check_plant_tf(name, sys):
 
 #: samples of reference preview the feedforward may use by default
 MAX_PREVIEW = 20
+#: the entries of a design that `ServoController` is built from
+DESIGN_KEYS = frozenset(('_fb', '_pre', '_post', '_linear', '_ps', '_other',
+                         '_scalars', '_lead', 'preview', 'compensates',
+                         'adapts', 'blends', 'dt', 'operating_point'))
+#: the largest magnitude of r_ahead and y a ServoController takes (the
+#: identifiers' bound on data, `_checks.DATA_RANGE`)
+INPUT_MOST = DATA_RANGE[1]
 
 
 def check_options(modulus_margin, feedforward, feedforward_from,
@@ -210,11 +222,44 @@ def overflow(k):
         f"identified); the controller's memory is unchanged")
 
 
+def check_inputs(r, y, where):
+    """Raise unless r_ahead and y (floats) are finite and at most
+    `INPUT_MOST` in magnitude: a larger finite value would sit in the
+    preview's delay line and overflow the samples after it."""
+    if not (abs(r) <= INPUT_MOST and abs(y) <= INPUT_MOST):
+        raise ValueError(f"r_ahead and y must be finite and at most "
+                         f"{INPUT_MOST:g} in magnitude; got r_ahead={r!r}, "
+                         f"y={y!r}{where}")
+
+
+def check_input_arrays(r_ahead, y):
+    """`check_inputs` on the sequences of `ServoController.run`."""
+    if r_ahead.size:
+        k = int(np.argmax(np.maximum(np.abs(r_ahead), np.abs(y))))
+        check_inputs(float(r_ahead[k]), float(y[k]), f" at sample {k} (the "
+                     f"controller's memory is unchanged)")
+
+
 def finite_inputs(t, u):
     """(r_ahead, y) of python-control's input vector `u` at time t, as
     floats; not finite raises, as `ServoController.step` does."""
     r, y = float(u[0]), float(u[1])
-    if not (math.isfinite(r) and math.isfinite(y)):
-        raise ValueError(f"r_ahead and y must be finite; got r_ahead={r!r}, "
-                         f"y={y!r} at t={t!r}")
+    check_inputs(r, y, f" at t={t!r}")
     return r, y
+
+
+def python_step(p, ix, t, x, u):
+    """(next state, output) of python-control's state x and input vector u
+    at time t (`ServoController`'s update and output functions); inputs,
+    state or output not finite raise."""
+    s = np.array(x, dtype=float)
+    if not np.all(np.isfinite(s)):
+        raise ValueError(f"the controller's state must be finite; got "
+                         f"{np.count_nonzero(~np.isfinite(s))} entries that "
+                         f"are not at t={t!r} (check X0)")
+    out = servo_step(p, ix, s, *finite_inputs(t, u))
+    if not math.isfinite(out):
+        raise OverflowError(f"u overflowed at t={t!r}: r_ahead or y is too "
+                            f"large for the controller's gains, or the loop "
+                            f"diverged")
+    return s, out

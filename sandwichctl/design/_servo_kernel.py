@@ -342,16 +342,32 @@ def _blend(p, ix, s, i_ps, i_ps2, u_post, d, e):
 
 @numba.njit(cache=True)
 def servo_run(p, ix, s, r_ahead, y):
-    """`servo_step` over given sequences (open loop: y is given)."""
-    u = np.empty(r_ahead.size)
+    """`servo_step` over given sequences (open loop: y is given); from
+    the first sample whose memory overflows on, u is nan."""
+    u = np.full(r_ahead.size, np.nan)
     for k in range(r_ahead.size):
         u[k] = servo_step(p, ix, s, r_ahead[k], y[k])
+        if not _finite(s):
+            u[k] = np.nan
+            break
     return u
 
 
 @numba.njit(cache=True)
 def servo_step_kept(p, ix, s, keep, r_ahead, y):
     """`servo_step` with the memory s copied to `keep` first, so that a
-    caller can put it back when u overflows."""
+    caller can put it back when u overflows: u is nan when u or the
+    memory does (a huge r_ahead can fill the memory with inf before it
+    reaches u)."""
     keep[:] = s
-    return servo_step(p, ix, s, r_ahead, y)
+    u = servo_step(p, ix, s, r_ahead, y)
+    return u if _finite(s) else np.nan
+
+
+@numba.njit(cache=True)
+def _finite(s):
+    """Whether every entry of the memory s is finite."""
+    for v in s:
+        if not np.isfinite(v):
+            return False
+    return True

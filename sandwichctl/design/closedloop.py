@@ -120,7 +120,10 @@ def closed_loop_response(plant, reference, controller, compensator=None):
     a number equal to the controller's). The controller is reset, then at
     every sample ``u(k) = controller.step(r(k + preview), y(k))``, exactly
     as stepping it by hand; a u that overflows is not applied (the loop
-    raises ``OverflowError``). The result has the outputs y and u.
+    raises ``OverflowError``). The result has the outputs y and u. The
+    controller starts at rest and reads r(preview) first, so it takes
+    r(0), ..., r(preview - 1) as its rest: start the reference at rest. A loop that diverges
+    leaves the controller reset.
 
     **With a** `TrackingController` (the paper's design), the plant is a
     `SandwichSystem` and the loop is
@@ -244,6 +247,12 @@ def _servo_response(plant, reference, ctrl, compensator):
                 raise ValueError(f"plant and controller must have the same "
                                  f"sampling time; got plant.dt={own!r} and "
                                  f"controller dt={dt!r}")
+        for method in ('reset', 'read'):
+            if hasattr(plant, method) and not callable(getattr(plant,
+                                                               method)):
+                raise TypeError(f"plant.{method} must be a method (called "
+                                f"before the first sample); got "
+                                f"{type(getattr(plant, method)).__name__}")
         name = type(plant).__name__
     else:
         raise TypeError(
@@ -251,6 +260,11 @@ def _servo_response(plant, reference, ctrl, compensator):
             f"or StateSpace, or an object with a step(u) -> y method; got "
             f"{type(plant).__name__}")
     r = check_signal('reference', reference)
+    if r.size <= ctrl.preview:
+        raise ValueError(
+            f"reference has {r.size} samples, and the controller reads it "
+            f"{ctrl.preview} samples ahead (ctrl.preview): give more than "
+            f"{ctrl.preview} samples (hold the last value)")
     y, u = servo_loop(plant, r, ctrl)
     step = 1.0 if dt is True else float(dt)
     return ct.TimeResponseData(

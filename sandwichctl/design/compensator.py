@@ -22,6 +22,7 @@ import numpy as np
 import control as ct
 
 from .inverse import BacklashInverse, _causal_inverse, _inverse_step
+from ..model._coefficients import tf_to_ss
 from ..model._kernel import _ss_output, _ss_update
 from ..model.sandwich import (SandwichSystem, _settling_samples,
                               _warn_divergence)
@@ -126,7 +127,7 @@ class SandwichCompensator(ct.InterconnectedSystem):
         with np.errstate(all='ignore'), warnings.catch_warnings():
             # scipy's normalisation overflows on an L1 gain of 1e-310
             warnings.simplefilter('ignore', RuntimeWarning)
-            lin = ct.ss(self._L1_inverse, inputs='x_d', outputs='u',
+            lin = tf_to_ss(self._L1_inverse, inputs='x_d', outputs='u',
                         name='L1_inverse')
         self._matrices = tuple(np.ascontiguousarray(np.asarray(M, float))
                                for M in (lin.A, lin.B, lin.C, lin.D))

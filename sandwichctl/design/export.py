@@ -101,7 +101,7 @@ def _check_directory(directory):
     if not isinstance(directory, (str, os.PathLike)):
         raise TypeError(f"directory must be a path (str or pathlib.Path); "
                         f"got {type(directory).__name__} {directory!r}")
-    path = Path(directory)
+    path = Path(directory).expanduser()     # "~/fw" as a shell reads it
     try:
         if path.exists() and not path.is_dir():
             raise ValueError(f"directory {str(path)!r} is a file, not a "

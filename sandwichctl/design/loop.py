@@ -23,6 +23,7 @@ import numpy as np
 import control as ct
 
 from ._servo_kernel import servo_step
+from ..model._coefficients import tf_to_ss
 from ..model._kernel import _ss_output, _ss_update
 from ..model.backlash import backlash_step
 from ..model.sandwich import SandwichSystem, _warn_divergence
@@ -38,7 +39,8 @@ def ss_arrays(sys):
     if sys is None:
         return (np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)),
                 np.zeros((1, 1)))
-    ss = ct.ss(sys)
+    ss = (tf_to_ss(sys) if isinstance(sys, ct.TransferFunction)
+          else ct.ss(sys))
     return tuple(np.ascontiguousarray(np.asarray(M, dtype=float))
                  for M in (ss.A, ss.B, ss.C, ss.D))
 
@@ -105,6 +107,8 @@ def servo_loop(plant, r, ctrl):
         _loop_kernel(ctrl._p, ctrl._ix, ctrl._s, r_ahead, *blocks, prm, y, u)
         _warn_divergence(f"the closed loop of {plant.name}", y, u[-1:],
                          np.arange(n))
+        if not np.all(np.isfinite(ctrl._s)):
+            ctrl.reset()        # a diverged memory would refuse every step
         return y, u
     if hasattr(plant, 'reset'):
         _call(plant.reset, 'reset()', 0)
@@ -189,6 +193,15 @@ def _turns(y, deadband):
     return int(turns)
 
 
+def _rms(e):
+    """RMS of e, scaled by its peak so that large finite data do not
+    overflow the squares."""
+    peak = float(np.max(np.abs(e))) if e.size else 0.0
+    if peak == 0.0 or not np.isfinite(peak):
+        return peak
+    return peak * float(np.sqrt(np.mean((e / peak) ** 2)))
+
+
 def servo_metrics(reference, y, u, dt, window=0.1, hold=0.3, deadband=0.0):
     r"""How well a servo loop tracked: the figures of ``bench_servo.py``.
 
@@ -242,8 +255,7 @@ def servo_metrics(reference, y, u, dt, window=0.1, hold=0.3, deadband=0.0):
     win = max(1, int(round(min(window / dt, r.size + 2.0))))
     near = [e[k:k + win] for k in _reversals(r)]
     near = np.concatenate(near) if near else e
-    return dict(rms=float(np.sqrt(np.mean(e ** 2))),
-                max=float(np.max(np.abs(e))),
-                near_reversals=float(np.sqrt(np.mean(near ** 2))),
+    return dict(rms=_rms(e), max=float(np.max(np.abs(e))),
+                near_reversals=_rms(near),
                 activity=float(np.sum(np.abs(np.diff(u)))),
                 hunting=hunting)

@@ -88,11 +88,12 @@ from ._servo_checks import (HARM, activity_ratio, bounded_checked,
                             helps_on_model, inner, outermost, scalar_index,
                             set_keywords)
 from ._servo_guard import guard_scalars
-from ._servo_inputs import (MAX_PREVIEW, check_options, check_plant_tf,
-                            unwrap_model, warn_result, finite_inputs,
+from ._servo_inputs import (MAX_PREVIEW, DESIGN_KEYS, check_options,
+                            check_plant_tf, unwrap_model, warn_result,
+                            python_step, check_inputs, check_input_arrays,
                             overflow)
-from ._servo_kernel import (pack, servo_step, servo_step_kept, servo_run,
-                            adapt_index, rest_scalars, BAND, GUARD, INVERSE,
+from ._servo_kernel import (pack, servo_step_kept, servo_run, adapt_index,
+                            rest_scalars, BAND, GUARD, INVERSE,
                             NSCALAR, IX_ADAPT, IX_BLEND, IX_GUARD, IX_SCALAR)
 from .loop import ss_arrays
 from ..model.sandwich import SandwichSystem
@@ -189,10 +190,9 @@ class ServoController(ct.NonlinearIOSystem):
     """
 
     def __init__(self, design, name=None):
-        if not (isinstance(design, dict) and '_fb' in design):
-            raise TypeError(f"a ServoController is built by "
-                            f"sw.servo_controller(model, ...); got "
-                            f"ServoController({type(design).__name__})")
+        if not (isinstance(design, dict) and DESIGN_KEYS <= set(design)):
+            raise TypeError(f"a ServoController is built by sw.servo_"
+                            f"controller(model, ...); got {design!r:.60}")
         self._design = design
         self.__dict__.update({k: v for k, v in design.items()
                               if not k.startswith('_')})
@@ -208,6 +208,7 @@ class ServoController(ct.NonlinearIOSystem):
         super().__init__(self._update, self._output,
                          inputs=['r_ahead', 'y'], outputs=['u'],
                          states=nstate, dt=design['dt'], name=name)
+        self._built = True
 
     # --- the per-sample interface -------------------------------------
     def reset(self, *, y=None, u=None):
@@ -232,7 +233,7 @@ class ServoController(ct.NonlinearIOSystem):
         self._s[:] = 0.0
         sc = self._ix[IX_SCALAR]
         self._p[sc + NSCALAR - 2:sc + NSCALAR] = u0, y0
-        self.operating_point = (float(u0), float(y0))
+        self.__dict__['operating_point'] = (float(u0), float(y0))
 
     def step(self, r_ahead, y):
         """One sample: the reference `preview` samples ahead and the y(k)
@@ -247,10 +248,7 @@ class ServoController(ct.NonlinearIOSystem):
             yk = float(y) if type(y) in PLAIN_REALS else check_real('y', y)
         except OverflowError:
             r, yk = check_real('r_ahead', r_ahead), check_real('y', y)
-        if not (math.isfinite(r) and math.isfinite(yk)):
-            raise ValueError(f"r_ahead and y must be finite; got "
-                             f"r_ahead={r!r}, y={yk!r} (the controller's "
-                             f"memory is unchanged)")
+        check_inputs(r, yk, " (the controller's memory is unchanged)")
         u = servo_step_kept(self._p, self._ix, self._s, self._keep, r, yk)
         if not math.isfinite(u):
             self._s[:] = self._keep
@@ -262,6 +260,7 @@ class ServoController(ct.NonlinearIOSystem):
         y is recorded, not simulated); returns u."""
         r_ahead = check_signal('r_ahead', r_ahead)
         y = check_signal('y', y, r_ahead.size)
+        check_input_arrays(r_ahead, y)
         keep = self._s.copy()
         u = servo_run(self._p, self._ix, self._s, r_ahead, y)
         bad = np.flatnonzero(~np.isfinite(u))
@@ -299,14 +298,17 @@ class ServoController(ct.NonlinearIOSystem):
 
     # --- python-control system ----------------------------------------
     def _update(self, t, x, u, params=None):
-        s = np.array(x, dtype=float)
-        servo_step(self._p, self._ix, s, *finite_inputs(t, u))
-        return s
+        return python_step(self._p, self._ix, t, x, u)[0]
 
     def _output(self, t, x, u, params=None):
-        s = np.array(x, dtype=float)
-        return np.array([servo_step(self._p, self._ix, s,
-                                    *finite_inputs(t, u))])
+        return np.array([python_step(self._p, self._ix, t, x, u)[1]])
+
+    def __setattr__(self, name, value):
+        if self.__dict__.get('_built') and name in self._design:
+            raise AttributeError(f"ServoController.{name} is read-only (the "
+                                 f"compiled controller would not see it): "
+                                 f"design again with sw.servo_controller")
+        super().__setattr__(name, value)
 
     def __reduce__(self):
         return (_rebuild, (self._design, self.name, self._s.copy(),
@@ -755,11 +757,11 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         # the compensation must at least help on the model it came from
         sc = scalar_index(ctrl)
         ctrl._p[sc + BAND.start:sc + BAND.stop] = 0.0
-        ctrl.band_fraction = ctrl._design['band_fraction'] = 0.0
+        ctrl.__dict__['band_fraction'] = ctrl._design['band_fraction'] = 0.0
         ctrl._design['_scalars'][BAND] = 0.0
         ctrl._ix[IX_ADAPT] = ctrl._ix[IX_BLEND] = 0
-        ctrl.adapts = ctrl._design['adapts'] = False
-        ctrl.blends = ctrl._design['blends'] = False
+        ctrl.__dict__['adapts'] = ctrl._design['adapts'] = False
+        ctrl.__dict__['blends'] = ctrl._design['blends'] = False
         notes.append(f"compensation turned off: with it, tracking on the "
                      f"identified model itself (20 bands, or the record's "
                      f"spread) was over {HARM:g} times worse than without "

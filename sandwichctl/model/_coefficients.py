@@ -141,3 +141,33 @@ def difference_equation(out, inp, a, b, q):
             parts.append(f"{coef:.6g} {sig}")
     text = ' '.join(parts)
     return f"{out}(k) = {text or '0'}"
+
+
+#: a leading numerator coefficient (over the denominator's leading one)
+#: this small is dropped by scipy's ``normalize`` (1e-14, with a margin)
+LOST = 1e-12
+
+
+def tf_to_ss(sys, **names):
+    """``ct.ss(sys, **names)`` of a SISO transfer function, exact at any
+    gain.
+
+    python-control's conversion (scipy's ``normalize`` and ``tf2ss``)
+    drops leading numerator coefficients below 1e-14 in absolute value,
+    so a block whose gain is tiny in the user's units (an L1 of 1e-15, or
+    the PID of a plant of gain 1e16) lost its direct term or its whole
+    numerator. Such a numerator is converted at unit peak and the output
+    scaled back; any other goes through python-control as before.
+    """
+    den = np.asarray(sys.den[0][0], dtype=float)
+    with np.errstate(all='ignore'):
+        num = np.asarray(sys.num[0][0], dtype=float) / den[0]
+        den = den / den[0]
+    lead = np.trim_zeros(num, 'f')
+    peak = float(np.max(np.abs(num))) if lead.size else 0.0
+    if not (lead.size and abs(lead[0]) <= LOST and np.all(np.isfinite(
+            num)) and np.all(np.isfinite(den))):
+        return ct.ss(sys, **names)
+    ss = ct.ss(ct.tf(num / peak, den, sys.dt), **names)
+    return ct.ss(ss.A, ss.B, peak * ss.C, peak * ss.D, sys.dt, **names)
+

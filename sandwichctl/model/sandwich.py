@@ -32,7 +32,7 @@ from .backlash import Backlash
 from ._kernel import (simulate_kernel, companion_kernel, batch_kernel,
                       companion_form, batch_signals, theta_batch,
                       SimulationResponse)
-from ._coefficients import (declare_orders, difference_coefficients,
+from ._coefficients import (tf_to_ss, declare_orders, difference_coefficients,
                            difference_equation, tf_from_coefficients,
                            signed_theta, SignedTheta)
 from .._checks import (check_discrete_siso_tf, check_order, check_signal,
@@ -143,8 +143,8 @@ class SandwichSystem(ct.InterconnectedSystem):
         bl = Backlash(backlash.m1, backlash.m2, backlash.D1, backlash.D2,
                       dt=dt, name='backlash')
         self._backlash_values = bl._values
-        ss1 = ct.ss(L1, inputs='u', outputs='x', name='L1')
-        ss2 = ct.ss(L2, inputs='v', outputs='y', name='L2')
+        ss1 = tf_to_ss(L1, inputs='u', outputs='x', name='L1')
+        ss2 = tf_to_ss(L2, inputs='v', outputs='y', name='L2')
         self._matrices = tuple(
             np.ascontiguousarray(np.asarray(M, dtype=float))
             for sys in (ss1, ss2) for M in (sys.A, sys.B, sys.C, sys.D))
