@@ -593,15 +593,27 @@ def progress_bar(enabled, **kwargs):
     return tqdm(disable=True, **kwargs)
 
 
+#: Units of the shared bar per search (`shared_progress`).
+SHARE_UNITS = 100
+
+
 @contextlib.contextmanager
 def shared_progress(task, n, desc):
-    """Within: the `n` searches that threads run at once on `task` (its
-    ``progress`` True) count on one bar, not on `n` bars that overwrite
-    one another's line; each search's `progress_bar` adds its total."""
+    """Within: the `n` searches run on `task` (its ``progress`` True), on
+    threads at once or one after the other, count on one bar, not on `n`
+    bars that overwrite one another's line.
+
+    The bar's total, `n` shares of `SHARE_UNITS`, is known when it is
+    made (tqdm's notebook widget keeps the total it was made with): a
+    search's `progress_bar` starts its share, its ticks fill it in
+    proportion to the total it planned, and its ``close`` fills the rest.
+    A search that raises leaves its share unfilled.
+    """
     if not (task.progress is True and n > 1):
         yield
         return
-    bar = progress_bar(True, total=0, desc=desc, leave=False)
+    bar = progress_bar(True, total=n * SHARE_UNITS, desc=desc, leave=False,
+                       bar_format='{l_bar}{bar}| [{elapsed}<{remaining}]')
     task.progress = _SharedBar(bar)
     try:
         yield
@@ -611,23 +623,45 @@ def shared_progress(task, n, desc):
 
 
 class _SharedBar:
-    """A tqdm bar that threads share (`shared_progress`)."""
+    """A tqdm bar that threads share (`shared_progress`), one share of
+    `SHARE_UNITS` per search. A search runs, and ticks, on one thread, so
+    each thread keeps the state of the search it runs: its planned total,
+    the ticks so far and the units shown."""
 
     def __init__(self, bar):
         self.bar, self.lock = bar, threading.Lock()
+        self.local = _Part()
 
     def part(self, total):
-        with self.lock:
-            self.bar.total += total
-            self.bar.refresh()
+        """A search's start, `total` ticks planned: this bar."""
+        self.local.total, self.local.ticks, self.local.shown = total, 0, 0
         return self
 
     def update(self, n=1):
-        with self.lock:
-            self.bar.update(n)
+        """`n` ticks of the search on this thread."""
+        part = self.local
+        part.ticks += n
+        if part.total > 0:
+            self._show(SHARE_UNITS * part.ticks // part.total)
 
     def close(self):
-        """One search's end: the bar stays until every search has ended."""
+        """One search's end: its share filled; the bar stays until every
+        search has ended."""
+        self._show(SHARE_UNITS)
+
+    def _show(self, units):
+        part = self.local
+        step = min(units, SHARE_UNITS) - part.shown
+        if step > 0:
+            part.shown += step
+            with self.lock:
+                self.bar.update(step)
+
+
+class _Part(threading.local):
+    """The state of a thread's search on a `_SharedBar`: ticks planned,
+    ticks so far, units shown."""
+    total = ticks = shown = 0
 
 
 def serial_blas(func):

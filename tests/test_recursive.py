@@ -1,5 +1,6 @@
 """Tests of the recursive identifiers of Section 3."""
 
+import pickle
 import warnings
 
 import numpy as np
@@ -269,6 +270,70 @@ def test_reset_restarts_a_diverged_estimator_as_a_fresh_one():
     np.testing.assert_array_equal(est.update_many(u[:10], y[:10]),
                                   fresh.update_many(u[:10], y[:10]))
     np.testing.assert_array_equal(est.theta, fresh.theta)
+
+
+def _runs_as(est, fresh, u, y):
+    """`est` runs on (u, y) as `fresh` does, bit for bit."""
+    np.testing.assert_array_equal(est.update_many(u, y),
+                                  fresh.update_many(u, y))
+    np.testing.assert_array_equal(est.theta, fresh.theta)
+    assert est.counts == fresh.counts
+
+
+class _PaperOrders(sw.RecursiveIdentifier):
+    """A subclass that fixes the orders in its own signature."""
+
+    def __init__(self, method='bundle', **kwargs):
+        super().__init__(**sw.examples.paper_plant().orders, method=method,
+                         **kwargs)
+
+
+@pytest.mark.parametrize('method', ['bundle', 'gradient', 'rpem'])
+def test_reset_of_a_subclass_with_fixed_orders(method):
+    """reset() does not call the subclass's own __init__ (whose signature
+    has no orders): the subclass restarts as a new one of its own."""
+    _, u, y = _paper_data(300, seed=21)
+    est = _PaperOrders(method)
+    est.update_many(u, y)
+    est.reset()
+    assert est.n_samples == 0 and type(est) is _PaperOrders
+    _runs_as(est, _PaperOrders(method), u[:100], y[:100])
+
+
+def test_reset_returns_to_the_construction_start():
+    """reset(theta0=X) starts that run from X; a later reset() starts from
+    the start given at construction again, as a fresh estimator does."""
+    plant, u, y = _paper_data(300, seed=22)
+    start = plant.theta * 1.1
+    est = sw.RecursiveIdentifier(**plant.orders, theta0=start)
+    est.update_many(u, y)
+    est.reset(theta0=plant.theta)
+    np.testing.assert_array_equal(est.theta0, plant.theta)
+    est.update_many(u[:50], y[:50])
+    est.reset()
+    np.testing.assert_array_equal(est.theta0, start)
+    np.testing.assert_array_equal(est.theta, start)
+    _runs_as(est, sw.RecursiveIdentifier(**plant.orders, theta0=start),
+             u[:100], y[:100])
+    est.theta0[:] = 0.5             # the construction start is a copy
+    est.reset()
+    np.testing.assert_array_equal(est.theta0, start)
+
+
+def test_reset_of_an_estimator_pickled_by_an_older_version():
+    """An estimator pickled by an older version (without
+    ``_theta0_construction``, nor ``_args``) resets to the start it was
+    made with and runs as a fresh one does."""
+    plant, u, y = _paper_data(300, seed=23)
+    est = sw.RecursiveIdentifier(**plant.orders, method='rpem')
+    est.update_many(u, y)
+    old = pickle.loads(pickle.dumps(est))
+    for name in ('_theta0_construction', '_args'):
+        old.__dict__.pop(name, None)
+    old.reset()
+    assert old.n_samples == 0 and old.diverged_at is None
+    _runs_as(old, sw.RecursiveIdentifier(**plant.orders, method='rpem'),
+             u[:100], y[:100])
 
 
 def test_result_plots_and_repr():

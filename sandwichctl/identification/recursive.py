@@ -140,9 +140,6 @@ class RecursiveIdentifier:
 
     def __init__(self, na, nb, nc, nd, q1=1, q2=1, method='bundle',
                  theta0=None, dt=True, keep_history=True, **options):
-        self._args = dict(na=na, nb=nb, nc=nc, nd=nd, q1=q1, q2=q2,
-                          method=method, dt=dt, keep_history=keep_history,
-                          **options)
         self.orders = {k: check_order(k, v) for k, v in
                        zip(('na', 'nb', 'nc', 'nd', 'q1', 'q2'),
                            (na, nb, nc, nd, q1, q2))}
@@ -152,20 +149,74 @@ class RecursiveIdentifier:
         self.options = _check_options(method, options)
         self.dt = check_dt('dt', dt)
         self.labels = theta_labels(na, nb, nc, nd)
-        p = len(self.labels)
+        theta0 = self._checked_start(theta0)
+        self.keep_history = check_bool('keep_history', keep_history)
+        self._pad = padding(self._o)
+        self._theta0_construction = theta0.copy()
+        self._start(theta0)
+
+    def reset(self, theta0=None):
+        """Start again, with no sample seen.
+
+        The orders, method, options, `dt` and `keep_history` stay; the
+        estimate, its history, the step counts and the method's own state
+        (the bundle, the covariance) start afresh, as in a new estimator
+        of the same arguments. A diverged estimate is restarted this way.
+
+        Parameters
+        ----------
+        theta0 : array_like, optional
+            The start of this run, in the order of eq. (2.5). Default: the
+            start given at construction, also after an earlier
+            ``reset(theta0=...)``.
+
+        Raises
+        ------
+        TypeError, ValueError
+            If `theta0` is not a finite vector of the parameters' length
+            with m1, m2 > 0 and D1, D2 >= 0; the estimator is then left as
+            it was.
+
+        Examples
+        --------
+        >>> import sandwichctl as sw
+        >>> est = sw.RecursiveIdentifier(na=1, nb=0, nc=1, nd=0)
+        >>> _ = est.update(1.0, 0.5)
+        >>> est.reset(theta0=[0.5, -0.5, 1.0, 1.0, 0.0, 0.0])
+        >>> est.n_samples, est.theta
+        (0, array([ 0.5, -0.5,  1. ,  1. ,  0. ,  0. ]))
+        >>> est.reset()                     # the start given at construction
+        >>> est.n_samples, est.theta
+        (0, array([0. , 0. , 0.1, 0.1, 0.1, 0.1]))
+        """
         if theta0 is None:
-            theta0 = np.zeros(p)
-            theta0[nc + na:nc + na + 4] = 0.1
-        theta0 = check_vector('theta0', theta0, p)
+            # one pickled by an older version has no _theta0_construction:
+            # its theta0, the start it was made with (unless an older
+            # reset(theta0=...) moved it)
+            theta0 = getattr(self, '_theta0_construction', self.theta0)
+        self._start(self._checked_start(theta0))
+
+    def _checked_start(self, theta0):
+        """`theta0` checked (a new array), or the default start for None:
+        zeros for the linear coefficients and 0.1 for m1, m2, D1, D2."""
+        na, nc = self.orders['na'], self.orders['nc']
         im = nc + na
+        if theta0 is None:
+            theta0 = np.zeros(len(self.labels))
+            theta0[im:im + 4] = 0.1
+        theta0 = check_vector('theta0', theta0, len(self.labels))
         if np.any(theta0[im:im + 2] <= 0) or np.any(theta0[im + 2:im + 4] < 0):
             raise ValueError(
                 f"theta0 must have m1, m2 > 0 and D1, D2 >= 0 (entries "
                 f"{im}..{im + 3}); got {theta0[im:im + 4]}")
+        return theta0
+
+    def _start(self, theta0):
+        """The state of a run from the checked `theta0`, no sample seen:
+        buffers, counts, history and the method's own state."""
+        p = theta0.size
         self.theta0 = theta0
         self._theta = theta0.copy()
-        self.keep_history = check_bool('keep_history', keep_history)
-        self._pad = padding(self._o)
         cap = self._pad + _CHUNK
         self._u, self._y = np.zeros(cap), np.zeros(cap)
         self._xs, self._vs, self._ys = np.zeros(cap), np.zeros(cap), \
@@ -180,12 +231,12 @@ class RecursiveIdentifier:
         # per-chunk outputs of the compiled recursions (gradient, rpem)
         self._buf = (np.zeros((cap, p)), np.zeros(cap),
                      np.zeros(cap, dtype=np.int64))
-        if method == 'rpem':
+        if self.method == 'rpem':
             self._S = [np.zeros((cap, p)) for _ in range(3)]
             self._P = self.options['P0'] * np.eye(p)
             self._lam = np.array([self.options['lam_start']])
             self._rwork = [np.zeros(p) for _ in range(4)]
-        if method == 'bundle':
+        if self.method == 'bundle':
             k1 = self.options['k1']
             self._trials = np.zeros((max(k1 - 1, 1), p))
             self._s = np.zeros(max(k1 - 1, 1))
@@ -194,21 +245,6 @@ class RecursiveIdentifier:
             self._beta = np.zeros(k1)
             self._weights = np.zeros(k1)
             self._work = [np.zeros(p) for _ in range(3)]
-
-    def reset(self, theta0=None):
-        """Start again, with no sample seen: from `theta0` (default: the
-        start given at construction), with the same orders, method and
-        options. A diverged estimate is restarted this way.
-
-        >>> import sandwichctl as sw
-        >>> est = sw.RecursiveIdentifier(na=1, nb=0, nc=1, nd=0)
-        >>> _ = est.update(1.0, 0.5)
-        >>> est.reset()
-        >>> est.n_samples, bool((est.theta == est.theta0).all())
-        (0, True)
-        """
-        self.__init__(**self._args, theta0=(self.theta0 if theta0 is None
-                                            else theta0))
 
     @property
     def _kinds_key(self):
