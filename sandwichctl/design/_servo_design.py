@@ -254,17 +254,44 @@ def _ki_max(a, b, mm, high):
     return np.where(ok, ki, -1.0)
 
 
+#: in a plant without an integrator, a stable real pole p whose distance
+#: 1 - p is below this share of the bandwidth of the rest of the plant is
+#: set aside like an integrator when the plant's bandwidth is read
+#: (`bandwidth`): P = 0.1 / (z - 0.9999) has a -3 dB frequency of 1e-4
+#: rad/sample, and a crossover limit in multiples of it gave a PID of kp
+#: 0.003 that reached 1.6 % of a step in 50 samples (kp 7.3 and the whole
+#: step now; a pole within `AT_ONE` of 1 was already an integrator, and one
+#: at 1 - 1e-6 got kp 3e-5). At 0.01 it also took the slow poles of
+#: drives' models (0.9955 beside a rest at 0.97 on the position drive with
+#: 200 um of play; next to an integrator on random drive 4's speed loop,
+#: whose linear design then saturated the drive): see docs/benchmarks.md
+NEAR_INTEGRATOR = 1e-3
+
+
+def _minus_3db(w, P):
+    """The first frequency of w where |P| is 3 dB below |P(w[0])|."""
+    mag = np.abs(P)
+    below = np.nonzero(mag <= mag[0] / np.sqrt(2))[0]
+    return float(w[below[0]]) if below.size else float(w[-1])
+
+
 def bandwidth(num, den, w):
     """Frequency (rad/sample) where |P| first falls 3 dB below its low-
-    frequency level (an integrator of P set aside)."""
+    frequency level (an integrator of P set aside, and a slow real pole
+    that acts as one over the rest of the plant: `NEAR_INTEGRATOR`)."""
     z = np.exp(1j * w)
     P = np.polyval(num, z) / np.polyval(den, z)
     poles = np.roots(den) if den.size > 1 else np.zeros(0)
     if np.any(at_one(poles)):
         P = P * (z - 1) / z
-    mag = np.abs(P)
-    below = np.nonzero(mag <= mag[0] / np.sqrt(2))[0]
-    return float(w[below[0]]) if below.size else float(w[-1])
+    real = poles.real[(np.abs(poles.imag) < 1e-12) & (poles.real > 0)
+                      & (poles.real < 1)]
+    if real.size and not np.any(at_one(poles)):
+        slow = real.max()
+        rest = _minus_3db(w, P * (z - slow) / z)
+        if 1 - slow < NEAR_INTEGRATOR * rest:
+            return rest
+    return _minus_3db(w, P)
 
 
 #: the loop gain must be below 1 above this multiple of the plant's bandwidth
