@@ -232,3 +232,15 @@ def test_servo_metrics_of_large_finite_data_are_finite():
     true = 1e200 * np.sqrt(np.mean((r / 1e200 * 0.001) ** 2))
     assert m['rms'] == pytest.approx(true, rel=1e-12)
     assert np.isfinite(m['near_reversals'])
+
+
+def test_a_long_preview_of_far_zeros_designs_without_scipys_warning():
+    # the preview inverse's leading coefficients, 1.05 ** -1000, were
+    # dropped by scipy's normalize with a BadCoefficients warning
+    zeros = 1.05 * np.exp(1j * np.linspace(0.2, 2.8, 10))
+    num = 0.1 * np.real(np.poly(np.r_[zeros, zeros.conj()]))
+    P = ct.tf(num, np.real(np.poly(np.full(21, 0.5))), 0.01)
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        ctrl = sw.servo_controller(P, max_preview=1000)
+    assert ctrl.preview > 20 and ctrl.margins['pole_radius'] < 1

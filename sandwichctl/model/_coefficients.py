@@ -168,6 +168,9 @@ def tf_to_ss(sys, **names):
     if not (lead.size and abs(lead[0]) <= LOST and np.all(np.isfinite(
             num)) and np.all(np.isfinite(den))):
         return ct.ss(sys, **names)
-    ss = ct.ss(ct.tf(num / peak, den, sys.dt), **names)
+    unit = num / peak
+    # what normalize drops anyway, at a warning: below 1e-14 of the peak
+    unit = unit[int(np.argmax(np.abs(unit) > 1e-14)):]
+    ss = ct.ss(ct.tf(unit, den, sys.dt), **names)
     return ct.ss(ss.A, ss.B, peak * ss.C, peak * ss.D, sys.dt, **names)
 
