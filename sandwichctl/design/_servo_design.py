@@ -282,11 +282,12 @@ def bandwidth(num, den, w):
     z = np.exp(1j * w)
     P = np.polyval(num, z) / np.polyval(den, z)
     poles = np.roots(den) if den.size > 1 else np.zeros(0)
-    if np.any(at_one(poles)):
+    integrating = np.any(at_one(poles))
+    if integrating:
         P = P * (z - 1) / z
     real = poles.real[(np.abs(poles.imag) < 1e-12) & (poles.real > 0)
                       & (poles.real < 1)]
-    if real.size and not np.any(at_one(poles)):
+    if real.size and not integrating:
         slow = real.max()
         rest = _minus_3db(w, P * (z - slow) / z)
         if 1 - slow < NEAR_INTEGRATOR * rest:

@@ -122,8 +122,8 @@ def closed_loop_response(plant, reference, controller, compensator=None):
     as stepping it by hand; a u that overflows is not applied (the loop
     raises ``OverflowError``). The result has the outputs y and u. The
     controller starts at rest and reads r(preview) first, so it takes
-    r(0), ..., r(preview - 1) as its rest: start the reference at rest. A loop that diverges
-    leaves the controller reset.
+    r(0), ..., r(preview - 1) as its rest: start the reference at rest.
+    A loop that diverges leaves the controller reset.
 
     **With a** `TrackingController` (the paper's design), the plant is a
     `SandwichSystem` and the loop is

@@ -128,7 +128,7 @@ class SandwichCompensator(ct.InterconnectedSystem):
             # scipy's normalisation overflows on an L1 gain of 1e-310
             warnings.simplefilter('ignore', RuntimeWarning)
             lin = tf_to_ss(self._L1_inverse, inputs='x_d', outputs='u',
-                        name='L1_inverse')
+                           name='L1_inverse')
         self._matrices = tuple(np.ascontiguousarray(np.asarray(M, float))
                                for M in (lin.A, lin.B, lin.C, lin.D))
         if not all(np.all(np.isfinite(M)) for M in self._matrices):

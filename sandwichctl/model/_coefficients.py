@@ -164,10 +164,10 @@ def tf_to_ss(sys, **names):
         num = np.asarray(sys.num[0][0], dtype=float) / den[0]
         den = den / den[0]
     lead = np.trim_zeros(num, 'f')
-    peak = float(np.max(np.abs(num))) if lead.size else 0.0
     if not (lead.size and abs(lead[0]) <= LOST and np.all(np.isfinite(
             num)) and np.all(np.isfinite(den))):
         return ct.ss(sys, **names)
+    peak = float(np.max(np.abs(num)))
     unit = num / peak
     # what normalize drops anyway, at a warning: below 1e-14 of the peak
     unit = unit[int(np.argmax(np.abs(unit) > 1e-14)):]

@@ -32,9 +32,9 @@ from .backlash import Backlash
 from ._kernel import (simulate_kernel, companion_kernel, batch_kernel,
                       companion_form, batch_signals, theta_batch,
                       SimulationResponse)
-from ._coefficients import (tf_to_ss, declare_orders, difference_coefficients,
+from ._coefficients import (declare_orders, difference_coefficients,
                            difference_equation, tf_from_coefficients,
-                           signed_theta, SignedTheta)
+                           tf_to_ss, signed_theta, SignedTheta)
 from .._checks import (check_discrete_siso_tf, check_order, check_signal,
                        check_vector, common_dt, check_name, check_label,
                        check_bool, check_dt, check_option, check_timepts,
