@@ -237,9 +237,9 @@ class ServoController(ct.NonlinearIOSystem):
 
     def step(self, r_ahead, y):
         """One sample: the reference `preview` samples ahead and the y(k)
-        just measured in; u(k) out. A value that is not finite raises
-        before the memory is touched, so one bad reading does not poison
-        every later sample."""
+        just measured in; u(k) out. A value not finite or above 1e100 in
+        magnitude raises before the memory is touched, so one bad reading
+        does not poison every later sample."""
         # a float or an int goes straight on (about 1 us a step); an int
         # too large for a float takes check_real's way to its error
         try:
