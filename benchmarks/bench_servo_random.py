@@ -18,10 +18,12 @@ and each design runs in closed loop on the true plant for
 10 ms), with the output's spread as the travel. It prints a row per
 design whose feedback the check moved to the sandwich's mbar L1 L2, a
 row per design that the check of `_servo_checks.bounded_checked` moved
-(its first loop ran away around the identified model), a row per
-default design whose RMS error exceeds one travel, and counts the
-designs refused (with their reasons) and those whose RMS error exceeds
-one travel.
+(its first loop ran away around the identified model, or tracked it worse
+than leaving it at rest), a row per default design whose RMS error
+exceeds one travel, and counts the designs refused (with their reasons)
+and those whose RMS error exceeds one travel. For a default design that
+check refused, it prints what the design it refused does on the true
+plant (made without the check).
 
 Run: python benchmarks/bench_servo_random.py [--seeds 50] [--seed0 0]
 """
@@ -36,13 +38,16 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 import sandwichctl as sw                                   # noqa: E402
+from sandwichctl.design import _servo_checks as sc         # noqa: E402
 from _timing import print_table                            # noqa: E402
 
 VARIANTS = (('plain', {}), ('negative gain', dict(negative_gain=True)),
             ('integrator in L1', dict(integrating='L1')),
             ('integrator in L2', dict(integrating='L2')))
 MOVED = "left the loop around the sandwich's mbar L1 L2 unstable"
-RAN = "runs away for the record's travel"
+RAN = "with the feedback chosen first"
+#: the start of `bounded_checked`'s reason
+AROUND = "the loop around the identified model"
 
 
 def rms_travels(plant, ctrl, r, travel):
@@ -78,7 +83,7 @@ def main():
     ap.add_argument('--seed0', type=int, default=0)
     args = ap.parse_args()
     start = time.perf_counter()
-    rows, poor, refused, ran = [], [], [], []
+    rows, poor, refused, ran, checked = [], [], [], [], []
     count = dict(cases=0, successes=0)
     worse = dict(default=0, before=0, linear=0)
     for seed in range(args.seed0, args.seed0 + args.seeds):
@@ -98,6 +103,13 @@ def main():
             for name, reason in (('sandwich', why), ('linear', why_lin)):
                 if reason is not None:
                     refused.append(f"seed {seed}, {label}, {name}: {reason}")
+            if why is not None and AROUND in why:
+                with sc.inner():        # the design the check refused
+                    unchecked, _ = design(res)
+                e_unchecked = rms_travels(case.plant, unchecked, r, travel)
+                checked.append([seed, label, f"{res.fit:.1f}",
+                                f"{res.linear['fit']:.1f}",
+                                f"{e_unchecked:.3g}"])
             if ctrl is not None:
                 e = rms_travels(case.plant, ctrl, r, travel)
                 moved = any(MOVED in note for note in ctrl.notes)
@@ -130,8 +142,13 @@ def main():
     print_table(['seed', 'variant', 'sandwich fit %', 'baseline fit %',
                  'feedback on baseline', 'default'], rows)
     print("\ndesigns moved because the first ran away around the "
-          "identified model (`_servo_checks.bounded_checked`):")
+          "identified model or tracked it worse than at rest "
+          "(`_servo_checks.bounded_checked`):")
     print_table(['seed', 'variant', 'redesigned', 'default'], ran)
+    print("\ndefault designs refused by that check, and what they do on "
+          "the true plant:")
+    print_table(['seed', 'variant', 'sandwich fit %', 'baseline fit %',
+                 'refused design'], checked)
     print("\ndefault designs worse than one travel:")
     print_table(['seed', 'variant', 'sandwich fit %', 'baseline fit %',
                  'default', 'linear design', 'feedback on'], poor)

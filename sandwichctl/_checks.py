@@ -593,6 +593,18 @@ def progress_bar(enabled, **kwargs):
     return tqdm(disable=True, **kwargs)
 
 
+def close_filled(bar):
+    """Close a search's `bar` full. Its total is what the search's steps
+    said they would run, an upper bound: a step that ends early ticks
+    less (130 of 132 planned), and tqdm's notebook widget closed short of
+    its total turns red. A share of a shared bar fills on its close."""
+    if not isinstance(bar, _SharedBar):
+        rest = (bar.total or 0) - bar.n
+        if rest > 0:
+            bar.update(rest)
+    bar.close()
+
+
 #: Units of the shared bar per search (`shared_progress`).
 SHARE_UNITS = 100
 

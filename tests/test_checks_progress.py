@@ -12,7 +12,8 @@ import pytest
 import tqdm.auto
 
 import sandwichctl as sw
-from sandwichctl._checks import SHARE_UNITS, progress_bar, shared_progress
+from sandwichctl._checks import (SHARE_UNITS, close_filled, progress_bar,
+                                 shared_progress)
 
 
 class _Recorder:
@@ -27,6 +28,10 @@ class _Recorder:
     def update(self, n=1):
         with self.lock:             # the shared bar updates under its lock
             self.steps.append(n)
+
+    @property
+    def n(self):
+        return sum(self.steps)
 
     def close(self):
         self.closed = True
@@ -48,7 +53,7 @@ def _search(task, planned, ticks, close=True):
     for _ in range(ticks):
         bar.update()
     if close:
-        bar.close()
+        close_filled(bar)
 
 
 @pytest.mark.parametrize('workers', [1, 3])
@@ -98,3 +103,26 @@ def test_identify_counts_its_searches_on_a_bar_of_known_total(made):
     bar, = made
     assert bar.total == 3 * SHARE_UNITS == sum(bar.steps)
     assert bar.closed
+
+
+@pytest.mark.parametrize('planned, ticks', [(24, 22), (7, 7), (5, 9)])
+def test_a_lone_search_bar_closes_full(made, planned, ticks):
+    """A search alone on its bar (no sharing) closes it at its total when
+    its steps ran fewer ticks than planned (tqdm's notebook widget closed
+    short turns red), and leaves it alone at or above it."""
+    _search(SimpleNamespace(progress=True), planned, ticks)
+    bar, = made
+    assert bar.closed and bar.n == max(planned, ticks)
+
+
+def test_identify_alone_closes_its_bar_full(made):
+    """A plain identify with progress=True (one search) ends with its bar
+    at the total its steps planned: random_case(28)'s steps tick 23 of the
+    24 planned."""
+    case = sw.data.random_case(28, n=600, snr=100)
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        sw.identify(case.u, case.y, **case.orders, progress=True)
+    starts = [b for b in made if b.kwargs.get('desc') == 'identify: starts']
+    assert len(starts) == 1 and starts[0].closed
+    assert starts[0].n == starts[0].total > 0

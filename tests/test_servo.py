@@ -12,6 +12,7 @@ import pytest
 import sandwichctl as sw
 from sandwichctl.design import _servo_design as sd
 from sandwichctl.design import _servo_data as sdata
+from sandwichctl.design import _servo_checks as sc
 from sandwichctl.tools.residuals import error_bands
 
 #: the issue's position-axis OE model, on which tracking_controller
@@ -590,10 +591,10 @@ def test_an_integrator_after_the_play_is_designed_on_the_sandwich():
     """With L2 integrating (a valve's play before a cylinder) the linear
     baseline spends a slow pole and zero on the play's drift, and the
     feedback designed on it left the loop all but open (pole radius
-    0.99999995 here, an RMS error 5.8 times the travel): by default the
-    feedback and the feedforward are designed on the sandwich's mbar L1
-    L2, and the loop on the plant tracks about as well as the design on
-    the plant itself."""
+    0.99999995 here, an RMS error 5.8 times the travel; now refused): by
+    default the feedback and the feedforward are designed on the
+    sandwich's mbar L1 L2, and the loop on the plant tracks about as well
+    as the design on the plant itself."""
     case = sw.data.random_case(30, integrating='L2')
     with warnings.catch_warnings():
         warnings.simplefilter('ignore')
@@ -613,7 +614,13 @@ def test_an_integrator_after_the_play_is_designed_on_the_sandwich():
     P = ctrl.design_plant
     assert np.isclose(np.polyval(P.num[0][0], 1.3)
                       / np.polyval(P.den[0][0], 1.3), own(1.3))
-    base = sw.servo_controller(res, feedback_from='baseline')
+    # forced onto the baseline, its loop tracks the model worse than at
+    # rest: refused; made without that check, it tracks the plant so too
+    with pytest.raises(ValueError, match="worse than leaving the plant at "
+                       "rest.*feedback_from='baseline' as asked"):
+        sw.servo_controller(res, feedback_from='baseline')
+    with sc.inner():
+        base = sw.servo_controller(res, feedback_from='baseline')
     assert base.design_plant is res.linear['model']
     limit = rms(sw.servo_controller(case.plant))
     assert rms(ctrl) < 1.5 * limit
@@ -687,21 +694,30 @@ def test_a_feedforward_that_wrecks_the_model_loop_is_not_kept():
     inverse asked for inputs of +-650 and the loop on the plant ran 26
     travels of RMS error. Checked on the identified model against
     feedback alone, it is dropped, and the notes say so. Forced, its loop
-    around the model runs 16 times the record reference's peak: refused."""
+    around the model runs 16 times the record reference's peak: refused.
+    The design left, feedback alone on a model this poor, tracks the model
+    no better than at rest (1.01 times the reference's RMS) and is refused
+    by the last check too; made without that check, it tracks the plant
+    within a travel without the +-650 inputs."""
     case = sw.data.random_case(43, snr=1e4, n=4000, integrating=True)
     with warnings.catch_warnings():
         warnings.simplefilter('ignore')
         res = sw.identify(case.u, case.y, **case.orders)
-    ctrl = sw.servo_controller(res)
+    with pytest.raises(ValueError, match="worse than leaving the plant at "
+                       "rest"):
+        sw.servo_controller(res)
+    with sc.inner():
+        ctrl = sw.servo_controller(res)
+        # the check's design without feedforward kept the user's
+        # max_preview, which feedforward=None refuses: every other value
+        # was refused
+        short = sw.servo_controller(res, max_preview=3)
     assert any("times worse than feedback alone" in n for n in ctrl.notes)
     travel = float(np.std(case.y))
     r = sw.servo_reference(0.01, travel, hold=1.0)
     out = sw.closed_loop_response(case.plant, r, ctrl)
     assert np.sqrt(np.mean((r - out.outputs[0]) ** 2)) < travel
     assert np.max(np.abs(out.outputs[1])) < 10
-    # the check's design without feedforward kept the user's max_preview,
-    # which feedforward=None refuses: every other value was refused
-    short = sw.servo_controller(res, max_preview=3)
     assert short.preview <= ctrl.preview
     # forced, it runs away around the model: refused, naming the keyword
     with pytest.raises(ValueError, match="feedforward_from='baseline' as "

@@ -488,11 +488,11 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         If the model is unstable (more than one integrator, or a pole
         outside the unit circle), has no delay, has a zero at z = 1, or
         no PID meets the margin with a stable loop; or, for an
-        identification result, if the loop around its model runs away
-        for the record's travel (RMS error over 10 times the reference's
-        peak) with the keywords given, and with the feedback on the other
-        linear model where the feedback was left to choose (the notes
-        say when that choice was made).
+        identification result, if its loop around its model tracks the
+        record's travel worse than leaving the plant at rest (an RMS
+        error above the reference's) with the keywords given, and with
+        the feedback on the other linear model where the feedback was
+        left to choose (the notes say when that choice was made).
 
     Warns
     -----

@@ -36,7 +36,7 @@ from ._starts import (splits, opened, random_start, recursive_start,
                       reintegrated, relocations, perturb, unsplit,
                       held_starts, holds)
 from .linear import oe_transfer_function
-from .._checks import progress_bar, shared_progress
+from .._checks import close_filled, progress_bar, shared_progress
 from ..tools.residuals import band_errors, noise_level
 
 __all__ = []
@@ -337,7 +337,7 @@ class Search:
         best, finals = self.step6_screen_and_converge(screened, others)
         polished = self.polish(best)               # steps 8 to 10
         best = self.step11_degenerate_best(polished, best, finals)
-        self.bar.close()
+        close_filled(self.bar)
         best = self.step12_never_worse_than_linear(best)
         best['n_starts'] = len(cands) + len(others)
         return self.probs[best['sign']], best, self.baseline()
