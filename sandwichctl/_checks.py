@@ -95,6 +95,9 @@ class SimulationWarning(SandwichWarning, RuntimeWarning):
 
 _PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__)) + os.sep
 _CONTROL_DIR = os.path.dirname(os.path.abspath(ct.__file__)) + os.sep
+#: a context manager's exit runs in contextlib's frame (a warning told at
+#: the end of a block, `_recursive.one_qp_warning`)
+_CONTEXTLIB = os.path.abspath(contextlib.__file__)
 
 
 def user_stacklevel():
@@ -110,7 +113,7 @@ def user_stacklevel():
     while frame is not None:
         path = os.path.abspath(frame.f_code.co_filename)
         if not (path.startswith(_PACKAGE_DIR)
-                or path.startswith(_CONTROL_DIR)):
+                or path.startswith(_CONTROL_DIR) or path == _CONTEXTLIB):
             return level
         frame = frame.f_back
         level += 1
@@ -323,6 +326,11 @@ def _real_array(name, values, what):
     if isinstance(values, ct.TimeResponseData):
         raise TypeError(f"{name} must be {what}; got a TimeResponseData "
                         f"(pass resp.inputs or resp.outputs)")
+    if np.ma.is_masked(values):
+        raise ValueError(f"{name} has {int(np.ma.count_masked(values))} "
+                         f"masked values, whose data would be used as if "
+                         f"measured; fill them (values.filled(...)) or cut "
+                         f"the record into experiments around them")
     try:
         raw = np.asarray(values)
     except (TypeError, ValueError):

@@ -1294,3 +1294,15 @@ def test_every_public_callable_has_a_row():
               if callable(getattr(sw, n)) and n not in skip}
     missing = sorted(public - covered - {'Sandwich'})
     assert not missing, f"no bad-input rows for {missing}"
+
+
+def test_masked_values_are_refused_not_used():
+    """A masked array's masked samples were used as if measured."""
+    plant = sw.examples.paper_plant()
+    u = sw.examples.paper_input(300, seed=0)
+    y = np.ma.masked_array(plant.simulate(u).outputs, mask=False)
+    y[10] = np.ma.masked
+    with pytest.raises(ValueError, match="y has 1 masked values"):
+        sw.identify(u, y, **plant.orders)
+    y.mask = np.ma.nomask                    # nothing masked: accepted
+    assert sw.compare(plant, u, y, plot=False).fit > 99.99

@@ -95,3 +95,13 @@ def test_refine_bad_input(kwargs, exc, match):
     args.update(kwargs)
     with pytest.raises(exc, match=match):
         sw.refine(**args)
+
+
+@pytest.mark.parametrize('scale', [1e200, 1e-200])
+def test_refine_refuses_data_beyond_the_scale_identify_takes(scale):
+    """refine leaked overflow warnings and an internal error on data of
+    1e200 and returned fit -inf on 1e-200; it refuses them as identify
+    does."""
+    plant, u, y = _data(300, seed=1)
+    with pytest.raises(ValueError, match="u has peak magnitude.*rescale u"):
+        sw.refine(plant, u * scale, y * scale)

@@ -1,5 +1,7 @@
 """Tests of the describing function of the asymmetric backlash (issue 5)."""
 
+import warnings
+
 import matplotlib.pyplot as plt
 import numpy as np
 import control as ct
@@ -229,3 +231,25 @@ def test_a_loop_at_rest_has_no_limit_cycle():
     amp, w, _ = sw.simulate_limit_cycle(model, ct.tf([0.3], [1], 1),
                                         n=6000, kick=2.0)
     assert amp == 0.0 and np.isnan(w)
+
+
+@pytest.mark.parametrize('refine', [True, False])
+def test_amplitudes_inside_the_band_are_left_out_of_the_scan(refine):
+    """A grid of A that starts inside the play (N(A) = 0, -1/N infinite)
+    gave thousands of (nan, nan) intersections and RuntimeWarnings, or,
+    refined, an error about a NaN amplitude the user never gave: those
+    amplitudes are left out, and the crossing beyond them is found."""
+    plant = sw.examples.paper_plant()
+    C = ct.tf([0.1], [1, -1], 1)
+    with warnings.catch_warnings():
+        warnings.simplefilter('error', RuntimeWarning)
+        # this loop is unstable around mbar L1 C L2, and says so
+        warnings.simplefilter('ignore', sw.SimulationWarning)
+        resp = sw.sandwich_limit_cycles(plant, C, A=np.linspace(0.3, 2, 20),
+                                        refine=refine)
+    pts = np.array(resp.intersections, dtype=float)
+    assert pts.shape == (1, 2) and np.all(np.isfinite(pts))
+    assert 1.7 < pts[0, 0] < 1.9
+    bl = sw.backlash_nonlinearity(sw.Backlash(1.0, 1.0, 0.5, 0.5))
+    with pytest.raises(ValueError, match="dead band"):
+        sw.limit_cycles(ct.tf([0.5], [1, -0.5], 1), bl, A=[0.1, 0.2, 0.4])

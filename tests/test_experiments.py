@@ -201,3 +201,16 @@ def test_experiments_built_by_hand_are_checked_and_keep_their_dt():
     assert res.model.dt == 0.1
     with pytest.raises(ValueError, match='same length'):
         sw.Experiments([(u, y[:10])], 0.1)
+
+
+def test_absolute_epoch_times_are_evenly_spaced():
+    """Times logged as Unix epoch seconds (1.7e9) carry 2.4e-7 s of
+    rounding, which the spacing check took for an uneven record."""
+    u = np.random.default_rng(0).standard_normal(600)
+    y = np.convolve(u, [0, 0.5, 0.25])[:600]
+    rec = ct.TimeResponseData(1.7e9 + 0.001 * np.arange(600), y, inputs=u)
+    assert sw.as_experiments(rec).dt == 0.001
+    t = 1.7e9 + 0.001 * np.arange(600)
+    t[300] += 0.0004
+    with pytest.raises(ValueError, match="not evenly spaced"):
+        sw.as_experiments(ct.TimeResponseData(t, y, inputs=u))

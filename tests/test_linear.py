@@ -382,3 +382,23 @@ def test_auto_with_a_cancelled_integrator_designs_a_loop_that_holds():
         warnings.simplefilter('ignore', sw.SimulationWarning)
         y = sw.closed_loop_response(case.plant, r, sw.servo_controller(res))
     assert np.max(np.abs(y.outputs[0])) < 3 * travel
+
+
+def test_a_fit_below_identifys_bar_is_not_a_success():
+    """identify_linear called a fit of 1 % on pure noise, and of 0.7 % on
+    an unstable plant it cannot follow, a success; it now needs the
+    fit above identify's MIN_FIT (5 %), and select_structure's linear
+    rows with it."""
+    import sandwichctl as sw
+    rng = np.random.default_rng(0)
+    u = sw.examples.paper_input(600, seed=1)
+    noise = identify_linear(u, rng.standard_normal(600), nb=2, nf=4, nk=2)
+    assert not noise.success and noise.fit < 5
+    assert "explains next to nothing" in noise.message
+    y = ct.forced_response(ct.tf([1], [1, -1.05], 1), inputs=u).outputs
+    assert not identify_linear(u, y, nb=1, nf=1).success
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        table = sw.select_structure((u, rng.standard_normal(600)),
+                                    orders=[(1, 0, 1, 0)])
+    assert not any(row['success'] for row in table.rows)

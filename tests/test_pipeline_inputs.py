@@ -120,3 +120,13 @@ def test_an_input_offset_with_estimated_offsets_fails_without_a_crash():
         res = sw.identify(case.u + 500, case.y, **case.plant.orders,
                           offsets='estimate')
     assert not res.success
+
+
+def test_a_refine_dict_is_checked_before_the_recursive_run():
+    """A key sw.refine does not take failed only after the whole recursive
+    run, with refine()'s bare TypeError."""
+    plant = sw.examples.paper_plant()
+    u = sw.examples.paper_input(300, seed=0)
+    y = plant.simulate(u).outputs
+    with pytest.raises(TypeError, match="refine=.*'foo'.*max_iter"):
+        sw.identify(u, y, **plant.orders, method='rpem', refine={'foo': 1})

@@ -100,3 +100,13 @@ def test_a_step_from_rest_is_not_an_operating_point():
     y = np.convolve(u, [0.0, 0.6, 0.3])[:u.size]
     res = sw.identify_linear(u, y, nb=2, nf=0, nk=1)
     assert res.success, res.message
+
+
+def test_mean_offsets_on_an_integrating_model_warn():
+    """offsets='mean' changes an integrating plant's drift: identify says
+    so when its model integrates, as select_structure does."""
+    case = sw.data.random_case(4, integrating=True, n=1000)
+    with pytest.warns(sw.IdentificationWarning, match="integrates.*"
+                      "offsets='estimate'"):
+        res = sw.identify(case.u, case.y, **case.orders, offsets='mean')
+    assert res.integrators['L1']

@@ -392,3 +392,21 @@ def test_a_streamed_estimate_that_is_unstable_is_not_a_success():
     assert np.array_equal(res.theta, batch.theta)
     assert not res.success and not batch.success
     assert res.message.startswith('the estimate is unstable')
+
+
+def test_a_bundle_estimate_of_null_steps_is_not_a_success():
+    """On the paper's data in other units (x 1e10) the bundle's line search
+    found no descent at 598 of 600 samples and theta stayed theta0, yet
+    the result said success; the QP's warning pointed into contextlib."""
+    plant = sw.examples.paper_plant()
+    u = sw.examples.paper_input(600, seed=1)
+    y = np.asarray(plant.simulate(u).outputs).ravel()
+    est = sw.RecursiveIdentifier(**plant.orders)
+    with pytest.warns(sw.IdentificationWarning, match="QP failed") as got:
+        est.update_many(u * 1e10, y * 1e10)
+    assert got[0].filename == __file__
+    res = est.result()
+    assert not res.success and "null steps" in res.message
+    fine = sw.RecursiveIdentifier(**plant.orders)
+    fine.update_many(u, y)
+    assert fine.result().success

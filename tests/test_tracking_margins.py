@@ -2,6 +2,8 @@
 that makes the loop unstable: python-control's took the PI's integrator
 at z = 1 for a phase crossover (1e-16 on a first-order plant)."""
 
+import warnings
+
 import numpy as np
 import control as ct
 import pytest
@@ -46,3 +48,25 @@ def test_a_plant_of_too_many_poles_is_refused_with_the_remedy():
     with pytest.raises(ValueError,
                        match='at most 100 poles.*servo_controller'):
         sw.tracking_controller(P)
+
+
+def test_the_phase_margin_is_the_angle_to_minus_one_without_warnings():
+    """Around a lightly damped resonance python-control wrapped the margin
+    of a gain crossover at +128 deg to -52 deg, for a stable loop that
+    meets its modulus margin; and on ordinary plants it warned of its
+    'frd' fallback. The margins are read on the log grid."""
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        ctrl = sw.tracking_controller(ct.tf([1], [1, 0, 0.99], 1))
+        for P in (ct.tf([0.001], [1, -0.999], 1),
+                  ct.tf([1], np.poly(np.full(12, 0.5)), 1)):
+            sw.tracking_controller(P)
+    gm, pm, sm = ctrl.margins[:3]
+    assert ctrl.pole_radius < 1 and sm >= 0.6 - 1e-3
+    assert 51 < pm < 53
+    L = ctrl.feedback * ct.tf([1], [1, 0, 0.99], 1)
+    w = np.linspace(1e-3, np.pi, 200001)
+    Lw = L(np.exp(1j * w))
+    cross = np.flatnonzero(np.diff(np.sign(np.abs(Lw) - 1)) != 0)
+    assert np.isclose(pm, np.min(180 - np.degrees(np.abs(np.angle(
+        Lw[cross])))), atol=0.2)

@@ -372,3 +372,34 @@ def test_one_step_needs_only_a_stable_l1(plant):
     with pytest.raises(ValueError, match=r"not finite"):
         sw.compare(bad, u, y, plot=False)
     assert np.isfinite(sw.compare(bad, u, y, plot=False, horizon=1).fit)
+
+
+def test_compare_refuses_data_sampled_at_another_rate_than_the_model():
+    """A linear model at dt = 0.1 on data at 0.2 ran silently at the
+    data's rate (fit 49 %, or 100 % one step ahead)."""
+    u = np.random.default_rng(0).standard_normal(300)
+    G = ct.tf([0.5], [1, -0.5], 0.1)
+    y = ct.forced_response(G, inputs=u).outputs
+    rec = ct.TimeResponseData(0.2 * np.arange(300), y, inputs=u)
+    for horizon in (None, 1):
+        with pytest.raises(ValueError, match=r"\(timepts\) are 0.2 apart "
+                           r"on average but model .* has dt = 0.1"):
+            sw.compare(G, rec, plot=False, horizon=horizon)
+    same = ct.TimeResponseData(0.1 * np.arange(300), y, inputs=u)
+    assert sw.compare(G, same, plot=False).fit > 99.99
+
+
+def test_k_step_prediction_of_a_model_without_past_outputs_is_its_run():
+    """With nc = 0 (an FIR L2) or a static model, the k-step prediction
+    uses no measured output: it is the free run (it raised numpy's
+    TypeError)."""
+    plant = sw.SandwichSystem.from_coefficients(
+        a=[-0.5], b=[1.0], c=[], d=[1.0, 0.5], m1=1, m2=1, D1=0.1, D2=0.1)
+    u = np.random.default_rng(0).standard_normal(300)
+    y = np.asarray(plant.simulate(u).outputs).ravel()
+    for k in (1, 5):
+        got = sw.compare(plant, u, y, horizon=k, plot=False)
+        np.testing.assert_allclose(got.yhat, y, atol=1e-12)
+    static = sw.compare(ct.tf([2.0], [1.0], 1), u, 2 * u, horizon=1,
+                        plot=False)
+    np.testing.assert_allclose(static.yhat, 2 * u)

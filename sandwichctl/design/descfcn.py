@@ -50,6 +50,7 @@ it to python-control, so amplitudes and frequencies come out right.
 """
 
 import math
+import warnings
 
 import numpy as np
 import control as ct
@@ -373,7 +374,9 @@ def limit_cycles(H, F, A, omega=None, refine=True):
     F : ct.DescribingFunctionNonlinearity or callable
         The nonlinearity, e.g. `backlash_nonlinearity`.
     A : array_like
-        Amplitudes at which to evaluate the describing function.
+        Amplitudes at which to evaluate the describing function. Those
+        where it is 0 (inside a dead band, where -1/N(A) is infinite and
+        no limit cycle can be) are left out of the scan.
     omega : array_like, optional
         Frequencies (rad per time unit) for the Nyquist curve.
     refine : bool, optional
@@ -398,18 +401,34 @@ def limit_cycles(H, F, A, omega=None, refine=True):
     if np.any(A <= 0):
         raise ValueError(f"A must hold amplitudes > 0; got {A.min():g}")
     refine = check_bool('refine', refine)
+    # where N(A) = 0 (inside a dead band) -1/N(A) is infinite: no limit
+    # cycle there, and python-control's scan and refinement meet NaNs
+    with np.errstate(all='ignore'):
+        gain = np.array([complex(ct.describing_function(F, a)) for a in A])
+    live = np.isfinite(gain) & (gain != 0)
+    if not live.any():
+        raise ValueError(f"the describing function is 0 (or not finite) at "
+                         f"every amplitude of A ({A.min():g} to "
+                         f"{A.max():g}): inside the nonlinearity's dead "
+                         f"band no limit cycle can be predicted; give "
+                         f"amplitudes beyond it")
+    A = A[live]
     if H.isdtime(strict=True):
         H = unit_circle_frd(H, omega, name=H.name)
         omega = H.omega
-    resp = ct.describing_function_response(H, F, A, omega=omega,
-                                           refine=refine, warn_nyquist=False)
+    with np.errstate(all='ignore'), warnings.catch_warnings():
+        warnings.simplefilter('ignore', RuntimeWarning)
+        resp = ct.describing_function_response(
+            H, F, A, omega=omega, refine=refine, warn_nyquist=False)
     if refine and any(not A.min() <= a <= A.max()
                       for a, _ in resp.intersections):
         # the refinement can leave the amplitudes scanned (even for a
         # negative one): there the crossing found on the scan stands
-        coarse = ct.describing_function_response(
-            H, F, A, omega=omega, refine=False,
-            warn_nyquist=False).intersections
+        with np.errstate(all='ignore'), warnings.catch_warnings():
+            warnings.simplefilter('ignore', RuntimeWarning)
+            coarse = ct.describing_function_response(
+                H, F, A, omega=omega, refine=False,
+                warn_nyquist=False).intersections
         if len(coarse) == len(resp.intersections):
             resp.intersections = [
                 fine if A.min() <= fine[0] <= A.max() else rough

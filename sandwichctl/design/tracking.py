@@ -7,8 +7,6 @@ feedforward with reference preview) for the linear plant that a
 `servo_controller`. `closed_loop_response` (module `closedloop`) runs it.
 """
 
-import warnings
-
 import numpy as np
 import control as ct
 
@@ -129,26 +127,34 @@ class TrackingController:
 
 
 def _margins(loop):
-    """``ct.stability_margins(loop)`` with the gain margin read on a log
-    grid from below the slowest pole to the Nyquist frequency, where the
-    loop is real: python-control's took the integrator's z = 1 for a
-    phase crossover (a gain margin of 1e-16 for a PI on a first-order
-    plant, whose loop doubles its gain safely)."""
-    with warnings.catch_warnings():
-        # it may evaluate the loop at its integrator pole z = 1 and warn
-        # about the division
-        warnings.simplefilter('ignore', RuntimeWarning)
-        _, pm, sm, _, wgc, wms = ct.stability_margins(loop)
+    """(gain margin, phase margin [deg], modulus margin and the frequencies
+    of the three) of the loop, read on a log grid from below the slowest
+    pole to the Nyquist frequency, where the loop is real.
+    python-control's ``stability_margins`` took the integrator's z = 1 for
+    a phase crossover (a gain margin of 1e-16 for a PI on a first-order
+    plant, whose loop doubles its gain safely), wrapped the phase margin
+    of a gain crossover at a phase above 0 to a negative number (-52 deg
+    for a loop 52 deg from -1 around a lightly damped resonance), and
+    warned of its fallback on ordinary plants. The phase margin is the
+    angle from the loop to -1 where |L| = 1, in [0, 180]."""
     num, den = loop.num[0][0], loop.den[0][0]
     w = frequency_grid(den, 6000)
-    z = np.exp(1j * w)
-    L = np.polyval(num, z) / np.polyval(den, z)
+    with np.errstate(all='ignore'):
+        z = np.exp(1j * w)
+        L = np.polyval(num, z) / np.polyval(den, z)
+    per = 1.0 if loop.dt is True else loop.dt
     turn = phase_crossings(L)
     gm, wpc = np.inf, np.nan
     if turn.size:
         k = turn[np.argmax(np.abs(L[turn]))]
-        gm, wpc = 1 / abs(L[k]), w[k] / (1.0 if loop.dt is True else loop.dt)
-    return gm, pm, sm, wpc, wgc, wms
+        gm, wpc = 1 / abs(L[k]), w[k] / per
+    cross = np.flatnonzero(np.diff(np.sign(np.abs(L) - 1)) != 0)
+    pm, wgc = np.inf, np.nan
+    if cross.size:
+        away = 180 - np.degrees(np.abs(np.angle(L[cross])))
+        pm, wgc = float(np.min(away)), w[cross[np.argmin(away)]] / per
+    k = int(np.nanargmin(np.abs(1 + L)))
+    return gm, pm, float(np.abs(1 + L[k])), wpc, wgc, w[k] / per
 
 
 def tracking_controller(sys, feedforward=True, modulus_margin=0.6,

@@ -441,9 +441,13 @@ class _OutputError:
         radius = max_root(fp)
         if converged and radius > PINNED:
             converged = False
+            more = (f"an integrator (try integrators=1 or 'auto')"
+                    if self.integrators == 0 else
+                    f"one more integrator than the {self.integrators} "
+                    f"fitted (try integrators={self.integrators + 1}), or "
+                    f"a slow pole the record is too short to place")
             message = (f"pinned at the stability boundary: a free pole has "
-                       f"|p| = {radius:.7f}; the data suggest an integrator "
-                       f"(try integrators=1 or 'auto')")
+                       f"|p| = {radius:.7f}; the data suggest {more}")
         dof = max(self.y.size - s['theta'].size
                   - (len(self.ys) if self.offsets else 0), 1)
         with np.errstate(all='ignore'):

@@ -39,7 +39,7 @@ from scipy.optimize import OptimizeResult
 
 from ._data import input_offset, prepare, scale, scaled, with_shift
 from ._linear import fit_oe_auto, fit_output, max_root, RADIUS
-from .result import INPUT_OFFSET, input_offset_text
+from .result import INPUT_OFFSET, MIN_FIT, input_offset_text
 from .._checks import (check_int, check_positive, check_tolerance, check_dt,
                        serial_blas)
 from .._checks import check_data_scale
@@ -109,8 +109,8 @@ class LinearIdentificationResult(OptimizeResult):
         integrators (None if that fit was skipped).
     nit, elapsed, success, message
         Iterations, wall time (s), whether the fit is finite, strictly
-        stable in its free poles, converged and has fit > 0, and what
-        happened.
+        stable in its free poles, converged and has a fit above
+        ``MIN_FIT`` (5 %, the bar of `identify`), and what happened.
     """
 
     def __repr__(self):
@@ -159,11 +159,12 @@ def _verdict(out, b, f, fit, choice, offset):
     and the data's `input_offset`."""
     finite = bool(np.all(np.isfinite(b)) and np.all(np.isfinite(f)))
     stable = max_root(out['Ff']) < RADIUS
-    success = (finite and stable and out['converged'] and fit > 0
+    success = (finite and stable and out['converged'] and fit > MIN_FIT
                and not offset > INPUT_OFFSET)
     message = out['message'] + choice
-    if out['converged'] and not fit > 0:
-        message += f"; fit {fit:.3g} % <= 0"
+    if out['converged'] and not fit > MIN_FIT:
+        message += (f"; fit {fit:.3g} % <= {MIN_FIT:g} %: the model "
+                    f"explains next to nothing of y")
     if offset > INPUT_OFFSET:
         message = input_offset_text(offset) + f" [{message}]"
     return success, message

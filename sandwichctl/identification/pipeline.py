@@ -52,6 +52,7 @@ and 2 alone, ``_search.linear_baseline``): one that fits the data worse is
 not a success.
 """
 
+import inspect
 import numbers
 import time
 import warnings
@@ -264,6 +265,7 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         raise TypeError(f"refine must be True, False, None or a dict of "
                         f"sw.refine's options; got {type(refine).__name__} "
                         f"{refine!r}")
+    _check_refine_keys(refine)
     us, ys, dt, offset_info, estimate = prepare(u, y, dt, offsets)
     check_data_scale('u', us), check_data_scale('y', ys)
     opt = _method_options(method, options, offsets, dict(
@@ -292,7 +294,32 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     moving = _excitation(result.model, us)
     result.excitation = np.nan if moving is None else moving
     judge(result, verdict(excitation=moving, input_offset=input_offset(us)))
+    _warn_mean_integrating(result, offsets)
     return result
+
+
+def _check_refine_keys(refine):
+    """A `refine` dict holds only keywords of `sw.refine` that identify
+    does not set itself (checked before a recursive run, not after)."""
+    if not isinstance(refine, dict):
+        return
+    taken = sorted(set(inspect.signature(_refine).parameters)
+                   - {'model', 'u', 'y', 'offsets'})
+    wrong = sorted(k for k in refine if k not in taken)
+    if wrong:
+        raise TypeError(f"refine={{...}} holds {wrong[0]!r}, which is not "
+                        f"an option of sw.refine here; it takes {taken}")
+
+
+def _warn_mean_integrating(result, offsets):
+    """Warn where a model identified on centred data integrates: the
+    means removed changed its drift."""
+    k = getattr(result, 'integrators', None)
+    if offsets == 'mean' and isinstance(k, dict) and any(k.values()):
+        warn("the model integrates, and the means removed from u and y "
+             "(offsets='mean') changed its drift, so its fit may mislead: "
+             "offsets='estimate' uses the data as given",
+             IdentificationWarning)
 
 
 def _method_options(method, options, offsets, arguments):

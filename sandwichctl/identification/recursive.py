@@ -406,8 +406,9 @@ class RecursiveIdentifier:
     def result(self, elapsed=None):
         """The `IdentificationResult` for the samples processed so far.
 
-        ``success`` says that samples were processed without divergence
-        and the estimate is finite with both blocks stable; it cannot
+        ``success`` says that samples were processed without divergence,
+        learning (not most of them covariance resets or null steps), and
+        the estimate is finite with both blocks stable; it cannot
         compare the model with a linear baseline, as ``sw.identify(...,
         method=...)`` does on a whole record."""
         p = self._theta.size
@@ -422,6 +423,13 @@ class RecursiveIdentifier:
                        f"them resets of the covariance (its trace "
                        f"overflowed): the estimate did not learn; scale u "
                        f"and y towards order 1 (other units)")
+        elif success and self.counts.get('null', 0) > self.n_samples / 2:
+            success = False         # the line search found no descent
+            message = (f"processed {self.n_samples} samples, "
+                       f"{self.counts['null']} of them null steps (the "
+                       f"line search found no descent): the estimate "
+                       f"hardly left theta0; scale u and y towards order 1 "
+                       f"(other units), or try another eta0 or theta0")
         elif success:
             message = f"processed {self.n_samples} samples"
         else:

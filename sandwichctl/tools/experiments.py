@@ -97,13 +97,21 @@ def _time_step(t, where):
         raise ValueError(f"{where}: the time vector must be a finite 1-D "
                          f"array of at least 2 points")
     steps = np.diff(t)
-    # the mean step, rounded to 12 significant digits: t = 0.005 k read
-    # back gives 0.005, not 0.004999999999999893
-    step = float(f"{(t[-1] - t[0]) / (t.size - 1):.12g}")
+    # the mean step, rounded to 12 significant digits (t = 0.005 k read
+    # back gives 0.005, not 0.004999999999999893), or to fewer where the
+    # times' own rounding leaves fewer (epoch times of 1.7e9 s: 6 at 1 ms)
+    span = float(t[-1] - t[0])
+    ulp = float(np.spacing(np.max(np.abs(t))))
+    digits = (12 if not span > 0 else
+              int(min(12, max(1, np.floor(-np.log10(2 * ulp / span))))))
+    step = float(f"{span / (t.size - 1):.{digits}g}")
     if not step > 0:
         raise ValueError(f"{where}: the time vector must increase; got a "
                          f"step of {step:g}")
-    if np.max(np.abs(steps - step)) > 1e-6 * step:
+    # each time read to its last bit: absolute (epoch) times of 1.7e9 s
+    # carry 2.4e-7 s of rounding, more than 1e-6 of a 1 ms step
+    if np.max(np.abs(steps - step)) > max(
+            1e-6 * step, 8 * float(np.spacing(np.max(np.abs(t))))):
         bad = int(np.argmax(np.abs(steps - step)))
         raise ValueError(
             f"{where}: the time vector is not evenly spaced (step {bad} is "

@@ -476,6 +476,7 @@ def compare(model, u, y=None, ax=None, initial_state=None, timepts=None,
 
     results = CompareResultList()
     for label, m in zip(labels, models):
+        _check_spacing(m, timepts)
         if horizon is None:
             yhat, t = _simulate(m, u, initial_state, timepts)
         else:
@@ -496,6 +497,23 @@ def _check_pair(y, yhat):
         raise ValueError(f"y and yhat must have the same number of "
                          f"samples; got {y.size} and {yhat.size}")
     return y, yhat
+
+
+def _check_spacing(sys, t):
+    """Refuse time points `t` spaced other than a discrete model's dt
+    (python-control would run a transfer function over them at the
+    data's rate, silently)."""
+    dt = getattr(sys, 'dt', None)
+    if (t is None or t.size < 2 or isinstance(dt, bool)
+            or not isinstance(dt, numbers.Real) or not dt > 0):
+        return
+    step = float(t[-1] - t[0]) / (t.size - 1)
+    if abs(step - float(dt)) > 1e-6 * float(dt):
+        raise ValueError(
+            f"the data's time points (timepts) are {step:g} apart on "
+            f"average but model {getattr(sys, 'name', sys)!r} has dt = "
+            f"{float(dt):g}; resample the data or use a model at the "
+            f"data's rate")
 
 
 def _default_timepts(sys, n):
@@ -616,6 +634,8 @@ def _k_step(c, f, y, k):
     from the measured samples up to r (zero before 0) and the predictions
     of steps 1..j-1.
     """
+    if c.size == 0:                     # no past output: the free run
+        return np.array(f, dtype=float)
     n = y.size
     k = min(k, n)                       # a longer horizon is the free run
     origin = np.arange(n) - k
