@@ -253,3 +253,10 @@ def test_amplitudes_inside_the_band_are_left_out_of_the_scan(refine):
     bl = sw.backlash_nonlinearity(sw.Backlash(1.0, 1.0, 0.5, 0.5))
     with pytest.raises(ValueError, match="dead band"):
         sw.limit_cycles(ct.tf([0.5], [1, -0.5], 1), bl, A=[0.1, 0.2, 0.4])
+    # a plain function is a nonlinearity too (its describing function
+    # comes back as an array of one)
+    sat = sw.limit_cycles(ct.tf([3], [1, 2, 1, 0]),
+                          lambda x: np.clip(x, -1, 1),
+                          A=np.linspace(0.5, 5, 30), refine=False)
+    assert len(sat.intersections) == 1
+    assert sat.intersections[0][1] == pytest.approx(1.0, abs=1e-3)

@@ -210,6 +210,12 @@ def test_absolute_epoch_times_are_evenly_spaced():
     y = np.convolve(u, [0, 0.5, 0.25])[:600]
     rec = ct.TimeResponseData(1.7e9 + 0.001 * np.arange(600), y, inputs=u)
     assert sw.as_experiments(rec).dt == 0.001
+    # on a short record the times' rounding leaves the mean step closer
+    # than a rounding to 6 digits would
+    short = 1.7e9 + 0.0012345 * np.arange(20)
+    got = sw.as_experiments(ct.TimeResponseData(short, u[:20],
+                                                inputs=u[:20])).dt
+    assert got == pytest.approx(0.0012345, rel=1e-5)
     t = 1.7e9 + 0.001 * np.arange(600)
     t[300] += 0.0004
     with pytest.raises(ValueError, match="not evenly spaced"):

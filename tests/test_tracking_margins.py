@@ -70,3 +70,14 @@ def test_the_phase_margin_is_the_angle_to_minus_one_without_warnings():
     cross = np.flatnonzero(np.diff(np.sign(np.abs(Lw) - 1)) != 0)
     assert np.isclose(pm, np.min(180 - np.degrees(np.abs(np.angle(
         Lw[cross])))), atol=0.2)
+
+
+def test_an_unstable_loop_has_a_negative_phase_margin():
+    """The phase margin read as the angle to -1 is negated where the
+    closed loop is unstable (a crossing past -180 deg): a feedback given
+    to from_feedback that leaves the loop unstable is not reported with a
+    healthy margin."""
+    tc = sw.TrackingController.from_feedback(ct.tf([0.8, 0], [1, -1], 1),
+                                             ct.tf([1], [1, -0.5, 0], 1))
+    assert tc.pole_radius > 1
+    assert tc.margins[1] == pytest.approx(-25.3, abs=0.1)

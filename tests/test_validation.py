@@ -385,6 +385,8 @@ def test_compare_refuses_data_sampled_at_another_rate_than_the_model():
         with pytest.raises(ValueError, match=r"\(timepts\) are 0.2 apart "
                            r"on average but model .* has dt = 0.1"):
             sw.compare(G, rec, plot=False, horizon=horizon)
+    with pytest.raises(ValueError, match="0.2 apart"):   # per experiment
+        sw.compare(G, sw.Experiments([(u, y), (u, y)], 0.2), plot=False)
     same = ct.TimeResponseData(0.1 * np.arange(300), y, inputs=u)
     assert sw.compare(G, same, plot=False).fit > 99.99
 

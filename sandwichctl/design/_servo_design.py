@@ -727,13 +727,23 @@ BLEND_TRAVEL = 5.0
 
 def design_reference(model, bands, dt):
     """`servo_reference` travelling `bands` of the sandwich's band as seen
-    in y (through L2's DC gain; 1 when that is not finite), sampled at dt
-    (at most 0.01 s; 0.01 s for a model without a sample time): the
-    reference the design checks its choices on."""
+    in y, sampled at dt (at most 0.01 s; 0.01 s for a model without a
+    sample time): the reference the design checks its choices on. The
+    band is seen through L2's DC gain or, where L2 integrates, its gain
+    at the reference's 1 Hz sine (a travel of 1 in y's units, as before,
+    made the checks depend on the units: y in mm instead of m turned a
+    valve's compensation off); 1 where neither is finite."""
     co = model.coefficients
     num, den = model.L2.num[0][0], model.L2.den[0][0]
-    with np.errstate(divide='ignore', invalid='ignore'):
-        gain = abs(np.polyval(num, 1.0) / np.polyval(den, 1.0))
+    step = dt if dt is not True and dt <= 0.01 else 0.01
+    with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
+        at_dc = np.polyval(den, 1.0)
+        gain = abs(np.polyval(num, 1.0) / at_dc)
+        # a pole at z = 1, to the rounding of den's coefficients
+        if not (np.isfinite(gain) and abs(at_dc) > 1e-9 * np.sum(
+                np.abs(den))):
+            z = np.exp(2j * np.pi * step)
+            gain = abs(np.polyval(num, z) / np.polyval(den, z))
     band = 0.5 * (co['m1'] + co['m2']) * (co['D1'] + co['D2']) * gain
     travel = bands * band if np.isfinite(band) and band > 0 else 1.0
     return reference_at(travel, dt)

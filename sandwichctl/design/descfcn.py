@@ -404,7 +404,8 @@ def limit_cycles(H, F, A, omega=None, refine=True):
     # where N(A) = 0 (inside a dead band) -1/N(A) is infinite: no limit
     # cycle there, and python-control's scan and refinement meet NaNs
     with np.errstate(all='ignore'):
-        gain = np.array([complex(ct.describing_function(F, a)) for a in A])
+        gain = np.array([complex(np.ravel(ct.describing_function(F, a))[0])
+                         for a in A])
     live = np.isfinite(gain) & (gain != 0)
     if not live.any():
         raise ValueError(f"the describing function is 0 (or not finite) at "

@@ -490,9 +490,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         no PID meets the margin with a stable loop; or, for an
         identification result, if its loop around its model tracks the
         record's travel worse than leaving the plant at rest (an RMS
-        error above the reference's) with the keywords given, and with
-        the feedback on the other linear model where the feedback was
-        left to choose (the notes say when that choice was made).
+        error above the reference's, and above half of it 10 times
+        slower) with the keywords given, and with the feedback on the
+        other linear model where it was left to choose (notes say so).
 
     Warns
     -----

@@ -60,8 +60,11 @@ class TrackingController:
     kp, ki : float or None
         The PI gains (None for `from_feedback`).
     margins : tuple or None
-        ``ct.stability_margins(C * P)``: gain margin, phase margin (deg),
-        stability (modulus) margin and the three frequencies.
+        As ``ct.stability_margins(C * P)``: gain margin, phase margin
+        (deg), stability (modulus) margin and the three frequencies, read
+        on a log frequency grid; the phase margin is the angle from the
+        loop to -1 where ``|L| = 1``, negative when the closed loop is
+        unstable.
     pole_radius : float or None
         Largest modulus of the closed-loop poles of ``ct.feedback(C * P)``.
     """
@@ -136,7 +139,8 @@ def _margins(loop):
     of a gain crossover at a phase above 0 to a negative number (-52 deg
     for a loop 52 deg from -1 around a lightly damped resonance), and
     warned of its fallback on ordinary plants. The phase margin is the
-    angle from the loop to -1 where |L| = 1, in [0, 180]."""
+    angle from the loop to -1 where |L| = 1, in [0, 180], negated when the
+    closed loop is unstable (a crossing past -180 deg)."""
     num, den = loop.num[0][0], loop.den[0][0]
     w = frequency_grid(den, 6000)
     with np.errstate(all='ignore'):
@@ -153,6 +157,8 @@ def _margins(loop):
     if cross.size:
         away = 180 - np.degrees(np.abs(np.angle(L[cross])))
         pm, wgc = float(np.min(away)), w[cross[np.argmin(away)]] / per
+        if not np.max(np.abs(np.roots(np.polyadd(den, num)))) < 1:
+            pm = -pm
     k = int(np.nanargmin(np.abs(1 + L)))
     return gm, pm, float(np.abs(1 + L[k])), wpc, wgc, w[k] / per
 
@@ -168,7 +174,7 @@ def tracking_controller(sys, feedforward=True, modulus_margin=0.6,
     (2.5 for 0.6) and a phase margin of at least
     ``2 asin(modulus_margin/2)`` (35 deg). The search is a two-stage grid
     over the gains scaled by the plant's DC gain; the result's margins are
-    those of ``ct.stability_margins``.
+    read on a log frequency grid (``TrackingController.margins``).
 
     Parameters
     ----------

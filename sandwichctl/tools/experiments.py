@@ -104,7 +104,10 @@ def _time_step(t, where):
     ulp = float(np.spacing(np.max(np.abs(t))))
     digits = (12 if not span > 0 else
               int(min(12, max(1, np.floor(-np.log10(2 * ulp / span))))))
-    step = float(f"{span / (t.size - 1):.{digits}g}")
+    mean = span / (t.size - 1)
+    step = float(f"{mean:.{digits}g}")
+    if abs(step - mean) > 2 * ulp / (t.size - 1):   # rounded too far
+        step = float(f"{mean:.12g}")
     if not step > 0:
         raise ValueError(f"{where}: the time vector must increase; got a "
                          f"step of {step:g}")

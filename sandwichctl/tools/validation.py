@@ -437,7 +437,10 @@ def compare(model, u, y=None, ax=None, initial_state=None, timepts=None,
         if len(data) > 1:
             return [compare(model, uu, yy, ax=None,
                             initial_state=initial_state, labels=labels,
-                            plot=plot, horizon=horizon) for uu, yy in data]
+                            plot=plot, horizon=horizon,
+                            timepts=None if data.dt is True else
+                            data.dt * np.arange(uu.size))
+                    for uu, yy in data]
         (u, y), = data
         if timepts is None and data.dt is not True:
             timepts = data.dt * np.arange(u.size)
