@@ -225,22 +225,19 @@ def bounded_checked(ctrl, design, model, r, moves, given):
 
 def tracks(ctrl, model, r, slow):
     """(Whether the loop of `ctrl` around `model` tracks r, its RMS error
-    for r, that for `slow` or None where not run): an RMS error at most `AT_REST` times r's own, that of leaving
-    the plant at rest; or, for a loop too slow for r, at most
-    `SLOW_SHARE` of it for `slow`, r `STRETCH` times slower (a loop that
-    merely lags a fast reference tracks a slow one closely; on the random
-    plants the loops that tracked their model worse than at rest tracked
-    a 10 times slower reference no better than 0.6 times its RMS, most of
-    them far worse)."""
+    for r, that for `slow` or None where not run): an RMS error at most
+    `AT_REST` times r's own, that of leaving the plant at rest; or, for a
+    loop too slow for r, at most `SLOW_SHARE` of it for `slow`, r
+    `STRETCH` times slower (a loop that merely lags a fast reference
+    tracks a slow one closely; on the random plants the loops that
+    tracked their model worse than at rest tracked a 10 times slower
+    reference no better than 0.6 times its RMS, most of them far
+    worse)."""
     e = loop_error(ctrl, model, r)
     if e <= AT_REST * _rms(r):
         return True, e, None
     e_slow = loop_error(ctrl, model, slow)
     return e_slow <= SLOW_SHARE * _rms(slow), e, e_slow
-
-
-def _rms(x):
-    return float(np.sqrt(np.mean(np.square(x))))
 
 
 def set_keywords(asked, defaults):
@@ -258,3 +255,11 @@ def set_keywords(asked, defaults):
 def _words(kw):
     """Keywords as a call spells them."""
     return ", ".join(f"{k}={v!r}" for k, v in kw.items())
+
+
+def _rms(x):
+    """RMS of x as `loop_error` takes it (not `loop._rms`, scaled by the
+    peak): a loop that leaves the plant at rest has an error equal to the
+    reference's RMS to the last bit, and `AT_REST` = 1 keeps it."""
+    return float(np.sqrt(np.mean(np.square(x))))
+

@@ -47,6 +47,7 @@ import control as ct
 
 from ..model._coefficients import tf_to_ss
 from .inverse import _fmt_roots
+from .loop import phase_margin
 from ._servo_kernel import ADAPT, BLEND
 from .references import servo_reference
 
@@ -630,12 +631,9 @@ def loop_margins(num, den, C):
     w = frequency_grid(den, 6000)
     L = loop_gain(num, den, C, w)
     mm = float(np.min(np.abs(1 + L)))
-    mag, ang = np.abs(L), np.angle(L)
-    cross = np.flatnonzero(np.diff(np.sign(mag - 1)) != 0)
-    pm = (float(np.min(180 - np.degrees(np.abs(ang[cross]))))
-          if cross.size else np.inf)
+    pm, _ = phase_margin(L)
     turn = phase_crossings(L)
-    gm = float(np.min(1 / mag[turn])) if turn.size else np.inf
+    gm = float(np.min(1 / np.abs(L[turn]))) if turn.size else np.inf
     return mm, gm, pm, loop_radius(num, den, C)
 
 
@@ -735,14 +733,13 @@ def design_reference(model, bands, dt):
     valve's compensation off); 1 where neither is finite."""
     co = model.coefficients
     num, den = model.L2.num[0][0], model.L2.den[0][0]
-    step = dt if dt is not True and dt <= 0.01 else 0.01
     with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
         at_dc = np.polyval(den, 1.0)
         gain = abs(np.polyval(num, 1.0) / at_dc)
         # a pole at z = 1, to the rounding of den's coefficients
         if not (np.isfinite(gain) and abs(at_dc) > 1e-9 * np.sum(
                 np.abs(den))):
-            z = np.exp(2j * np.pi * step)
+            z = np.exp(2j * np.pi * _reference_step(dt))
             gain = abs(np.polyval(num, z) / np.polyval(den, z))
     band = 0.5 * (co['m1'] + co['m2']) * (co['D1'] + co['D2']) * gain
     travel = bands * band if np.isfinite(band) and band > 0 else 1.0
@@ -752,8 +749,13 @@ def design_reference(model, bands, dt):
 def reference_at(travel, dt):
     """`servo_reference` travelling `travel`, sampled at dt (at most
     0.01 s; 0.01 s without a sample time)."""
-    return servo_reference(dt if dt is not True and dt <= 0.01 else 0.01,
-                           travel)
+    return servo_reference(_reference_step(dt), travel)
+
+
+def _reference_step(dt):
+    """The sample time of the design's references: dt, at most 0.01 s,
+    and 0.01 s without a sample time."""
+    return dt if dt is not True and dt <= 0.01 else 0.01
 
 
 def record_reference(result, dt):

@@ -417,19 +417,12 @@ def limit_cycles(H, F, A, omega=None, refine=True):
     if H.isdtime(strict=True):
         H = unit_circle_frd(H, omega, name=H.name)
         omega = H.omega
-    with np.errstate(all='ignore'), warnings.catch_warnings():
-        warnings.simplefilter('ignore', RuntimeWarning)
-        resp = ct.describing_function_response(
-            H, F, A, omega=omega, refine=refine, warn_nyquist=False)
+    resp = _df_response(H, F, A, omega, refine)
     if refine and any(not A.min() <= a <= A.max()
                       for a, _ in resp.intersections):
         # the refinement can leave the amplitudes scanned (even for a
         # negative one): there the crossing found on the scan stands
-        with np.errstate(all='ignore'), warnings.catch_warnings():
-            warnings.simplefilter('ignore', RuntimeWarning)
-            coarse = ct.describing_function_response(
-                H, F, A, omega=omega, refine=False,
-                warn_nyquist=False).intersections
+        coarse = _df_response(H, F, A, omega, False).intersections
         if len(coarse) == len(resp.intersections):
             resp.intersections = [
                 fine if A.min() <= fine[0] <= A.max() else rough
@@ -438,6 +431,15 @@ def limit_cycles(H, F, A, omega=None, refine=True):
             resp.intersections = [p for p in resp.intersections
                                   if A.min() <= p[0] <= A.max()]
     return resp
+
+
+def _df_response(H, F, A, omega, refine):
+    """``ct.describing_function_response`` without its RuntimeWarnings
+    (divisions on the Nyquist curve's way; a NaN found is dropped)."""
+    with np.errstate(all='ignore'), warnings.catch_warnings():
+        warnings.simplefilter('ignore', RuntimeWarning)
+        return ct.describing_function_response(
+            H, F, A, omega=omega, refine=refine, warn_nyquist=False)
 
 
 def first_harmonic(signal, dt=1.0):

@@ -13,7 +13,9 @@
   3.11).
 
 `closed_loop_response` (module `closedloop`) calls it for a
-`ServoController`.
+`ServoController`. `servo_metrics` measures such a loop, and
+`phase_margin` reads a loop's phase margin off its frequency response on
+a grid (the servo design's and `tracking_controller`'s).
 """
 
 import math
@@ -191,6 +193,17 @@ def _turns(y, deadband):
             direction = 1 if move > 0 else -1
             extreme = value
     return int(turns)
+
+
+def phase_margin(L):
+    """(phase margin [deg], its grid index) of the loop L on a grid: the
+    least angle from L to -1 where |L| crosses 1, in [0, 180]; (inf,
+    None) where it never does."""
+    cross = np.flatnonzero(np.diff(np.sign(np.abs(L) - 1)) != 0)
+    if not cross.size:
+        return np.inf, None
+    away = 180 - np.degrees(np.abs(np.angle(L[cross])))
+    return float(np.min(away)), int(cross[np.argmin(away)])
 
 
 def _rms(e):

@@ -14,6 +14,7 @@ from .inverse import causal_inverse, _fmt_roots
 from .compensator import _tf_text
 from ._servo_design import (at_one, frequency_grid, loop_radius, design_pid,
                             phase_crossings, pid_tf)
+from .loop import phase_margin
 from .._checks import (check_discrete_siso_tf, common_dt, check_bool,
                        check_finite)
 
@@ -83,9 +84,9 @@ class TrackingController:
         self.margins = self.pole_radius = None
         if design_plant is not None:
             loop = feedback * design_plant
-            self.margins = _margins(loop)
             self.pole_radius = float(np.max(np.abs(
                 ct.feedback(loop, 1).poles())))
+            self.margins = _margins(loop, self.pole_radius < 1)
 
     @classmethod
     def from_feedback(cls, C, design_plant=None):
@@ -129,7 +130,7 @@ class TrackingController:
                 f"modulus_margin={sm:.3g})")
 
 
-def _margins(loop):
+def _margins(loop, stable):
     """(gain margin, phase margin [deg], modulus margin and the frequencies
     of the three) of the loop, read on a log grid from below the slowest
     pole to the Nyquist frequency, where the loop is real.
@@ -139,8 +140,8 @@ def _margins(loop):
     of a gain crossover at a phase above 0 to a negative number (-52 deg
     for a loop 52 deg from -1 around a lightly damped resonance), and
     warned of its fallback on ordinary plants. The phase margin is the
-    angle from the loop to -1 where |L| = 1, in [0, 180], negated when the
-    closed loop is unstable (a crossing past -180 deg)."""
+    angle from the loop to -1 where |L| = 1 (`phase_margin`), negated
+    when the closed loop is not `stable` (a crossing past -180 deg)."""
     num, den = loop.num[0][0], loop.den[0][0]
     w = frequency_grid(den, 6000)
     with np.errstate(all='ignore'):
@@ -152,13 +153,10 @@ def _margins(loop):
     if turn.size:
         k = turn[np.argmax(np.abs(L[turn]))]
         gm, wpc = 1 / abs(L[k]), w[k] / per
-    cross = np.flatnonzero(np.diff(np.sign(np.abs(L) - 1)) != 0)
-    pm, wgc = np.inf, np.nan
-    if cross.size:
-        away = 180 - np.degrees(np.abs(np.angle(L[cross])))
-        pm, wgc = float(np.min(away)), w[cross[np.argmin(away)]] / per
-        if not np.max(np.abs(np.roots(np.polyadd(den, num)))) < 1:
-            pm = -pm
+    pm, at = phase_margin(L)
+    wgc = np.nan if at is None else w[at] / per
+    if at is not None and not stable:
+        pm = -pm
     k = int(np.nanargmin(np.abs(1 + L)))
     return gm, pm, float(np.abs(1 + L[k])), wpc, wgc, w[k] / per
 

@@ -113,8 +113,7 @@ def _time_step(t, where):
                          f"step of {step:g}")
     # each time read to its last bit: absolute (epoch) times of 1.7e9 s
     # carry 2.4e-7 s of rounding, more than 1e-6 of a 1 ms step
-    if np.max(np.abs(steps - step)) > max(
-            1e-6 * step, 8 * float(np.spacing(np.max(np.abs(t))))):
+    if np.max(np.abs(steps - step)) > max(1e-6 * step, 8 * ulp):
         bad = int(np.argmax(np.abs(steps - step)))
         raise ValueError(
             f"{where}: the time vector is not evenly spaced (step {bad} is "
