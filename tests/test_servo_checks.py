@@ -10,7 +10,8 @@ import control as ct
 import pytest
 
 import sandwichctl as sw
-from sandwichctl.design import _servo_checks as sc, _servo_design
+from sandwichctl.design import _servo_checks as sc, _servo_data as sdata, \
+    _servo_design
 
 
 @pytest.fixture(scope='module')
@@ -247,3 +248,70 @@ def test_the_checks_run_in_the_models_coordinates_whatever_the_zero():
     assert (far.kp, far.ki, far.kd, far.band_fraction) == (
         at_zero.kp, at_zero.ki, at_zero.kd, at_zero.band_fraction)
     assert far.operating_point == (0.0, 130 * peak)
+
+
+def test_a_mode_no_data_vouch_for_is_damped_for_the_checks_only():
+    """`checked_model` damps a pole all but on the unit circle above the
+    band the record measured (here 0.03 rad/sample) to radius 0.5, its
+    angle and the block's DC gain kept, and says so; a slow pole, a
+    damped one and the integrator stay, and so does a model without such
+    a mode (the same object)."""
+    dt = 0.001
+    L1 = ct.tf([1.0, -0.92], np.polymul([1.0, -1.0], [1.0, 0.9993]), dt)
+    L2 = ct.tf([1.0, 0.0], [1.0, -0.98], dt)
+    model = sw.SandwichSystem(L1, sw.Backlash(1.0, 1.0, 0.1, 0.1, dt=dt), L2)
+    notes = []
+    got = sdata.checked_model(model, (None, 0.03), notes)
+    assert sorted(np.round(got.L1.poles().real, 6)) == [-0.5, 1.0]
+    assert np.allclose(got.L2.den[0][0], L2.den[0][0])
+    assert got.backlash.D1 == 0.1
+    # the same DC gain: L1 times (z - 1) at z = 1
+    num0, den0 = L1.num[0][0], np.polydiv(L1.den[0][0], [1.0, -1.0])[0]
+    num1, den1 = (got.L1.num[0][0],
+                  np.polydiv(got.L1.den[0][0], [1.0, -1.0])[0])
+    assert np.isclose(np.polyval(num1, 1) / np.polyval(den1, 1),
+                      np.polyval(num0, 1) / np.polyval(den0, 1))
+    assert len(notes) == 1 and "-0.9993 damped to radius 0.5" in notes[0]
+    # below the band measured, or damped: kept
+    assert sdata.checked_model(model, (None, 3.15), []) is model
+    calm = sw.SandwichSystem(ct.tf([1.0, 0.0], [1.0, 0.5], dt),
+                             model.backlash, L2)
+    assert sdata.checked_model(calm, (None, 0.03), []) is calm
+    assert sdata.checked_model(model, None, []) is model
+    # the design's margin note names such a pole of its plant
+    den = np.polymul([1.0, -1.0], [1.0, 0.9993])
+    assert "-0.9993 are all but undamped" in sdata._wild_words((None, 0.03),
+                                                                den)
+    assert sdata._wild_words((None, 0.03), [1.0, -0.5]) == ""
+
+
+def test_a_swept_sine_record_keeps_the_baseline_feedback_on_the_drive():
+    """A swept sine of 0.2 to 12 Hz into the speed loop of the drive with
+    12 um of play leaves L1 a pole near -1: a mode at the Nyquist
+    frequency the sweep never excited (its half sample of lead fits the
+    record). The baseline's loop ran away around it, so the checks moved
+    the feedback to the sandwich's mbar L1 L2, a PD crossing over 500
+    times slower: 30.6 um of RMS error on the drive against the linear
+    design's 1.25. The checks now read that mode damped."""
+    dt, n = sw.data.DRIVE_DT, 5000
+    t = np.arange(n) * dt
+    f0, f1 = 0.2, 12.0
+    u = 10.0 * np.sin(2 * np.pi * f0 * t[-1] / np.log(f1 / f0)
+                      * (np.exp(t / t[-1] * np.log(f1 / f0)) - 1))
+    y = sw.data.servo_drive(u, 'speed', 12e-6, dt, seed=1000)
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        res = sw.identify(u, y, na=2, nb=1, nc=2, nd=1, q1=1, q2=0, dt=dt)
+        lin = sw.identify_linear(u, y, nb=3, nf=4, nk=1, dt=dt,
+                                 integrators=res.linear['integrators'])
+    assert res.success and np.min(res.model.L1.poles().real) < -0.99
+    ctrl, c_lin = sw.servo_controller(res), sw.servo_controller(lin)
+    assert any("damped to radius 0.5" in note for note in ctrl.notes)
+    assert not any("left the loop around" in note for note in ctrl.notes)
+    r = sw.servo_reference(dt, 1e-3)
+    errors = []
+    for c in (ctrl, c_lin):
+        drive = sw.data.ServoDrive('speed', 12e-6, dt, seed=500, n=r.size)
+        y = sw.closed_loop_response(drive, r, c).outputs[0]
+        errors.append(np.sqrt(np.mean((r - y) ** 2)))
+    assert errors[0] <= 1.05 * errors[1]

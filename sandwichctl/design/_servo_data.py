@@ -20,7 +20,9 @@ import control as ct
 from . import _servo_design as sd
 from ._servo_design import (CROSSOVER_LIMIT, bandwidth, constraint_columns,
                             frequency_grid, loop_gain, tf_arrays)
+from ..model.sandwich import SandwichSystem
 from ..tools.residuals import band_errors
+from .inverse import _fmt_roots
 
 __all__ = []
 
@@ -37,6 +39,14 @@ TRUSTED = 0.5
 CROSSOVER_MOST = 8.0
 #: relative standard error up to which `measured_response` uses the data
 RELIABLE = 0.1
+#: `checked_model`: a pole of L1 or L2 above the band the data measured is
+#: one no record vouches for when its factor 1 / (z - p) peaks more than
+#: RESONANT times above its DC gain, |1 - p| / (1 - |p|) (a mode all but
+#: undamped: a mechanical mode damped at 2 % at a quarter of the sampling
+#: frequency peaks 45 times); the checks read it damped to radius TAMED,
+#: its angle and the block's DC gain kept
+RESONANT = 100.0
+TAMED = 0.5
 
 
 def _top(w, good):
@@ -104,6 +114,56 @@ def measured_response(base, rel):
         return np.where((w >= wk[0]) & (w <= top), (1 + d) * np.polyval(
             num, np.exp(1j * w)) / np.polyval(den, np.exp(1j * w)), np.nan)
     return response, top
+
+
+def wild_poles(poles, top):
+    """Which of `poles` no data vouch for: above `top` rad/sample (the top
+    of the band measured reliably) and all but undamped (`RESONANT`)."""
+    poles = np.asarray(poles, complex)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        peak = np.abs(1 - poles) / (1 - np.abs(poles))
+    return (np.abs(np.angle(poles)) > top) & (np.abs(poles) < 1) \
+        & (peak > RESONANT)
+
+
+def checked_model(model, response, notes):
+    """The sandwich `model` that the checks of `_servo_checks` run loops
+    around: `model` itself, or with the poles of L1 and L2 that no data
+    vouch for damped (`RESONANT`, `TAMED`), told in `notes`. Such a pole
+    lies above the top of the band `measured_response` measured reliably,
+    all but on the unit circle: a swept sine up to 12 Hz of a speed loop
+    sampled at 1 kHz left a pole of L1 at -0.9993, a mode at the Nyquist
+    frequency that the input never excited (its low-frequency tail, half a
+    sample of lead, fits the record). A loop designed on the linear
+    baseline, which fits the record as well without it, runs away around
+    that mode, and the checks moved the feedback to the sandwich's own
+    mbar L1 L2: a loop 24 times worse on the drive than the linear
+    design's. The design itself keeps the model's poles."""
+    if response is None or not isinstance(model, SandwichSystem):
+        return model
+    top, moved = response[1], []
+
+    def tamed(block):
+        num, den = sd.tf_arrays(block)
+        poles = np.roots(den) if den.size > 1 else np.zeros(0)
+        wild = wild_poles(poles, top)
+        if not wild.any():
+            return block
+        moved.extend(poles[wild])
+        new = np.where(wild, TAMED * np.exp(1j * np.angle(poles)), poles)
+        dc = np.prod((1 - new[wild]) / (1 - poles[wild]))
+        return ct.tf(num * np.real(dc), np.real(np.poly(new)), block.dt)
+
+    L1, L2 = tamed(model.L1), tamed(model.L2)
+    if not moved:
+        return model
+    notes.append(
+        f"the checks around the identified model read its pole(s) at "
+        f"{_fmt_roots(np.array(moved))} damped to radius {TAMED:g} "
+        f"(DC gain kept): modes all but undamped above the band the record "
+        f"measured reliably ({top:.3g} rad/sample), which no data vouch for "
+        f"(excite the plant up there to identify them)")
+    return SandwichSystem(L1, model.backlash, L2, name=model.name)
 
 
 def measured_modulus(measured, num, den, C):
@@ -190,7 +250,22 @@ def margin_words(data, response, mmeas, mmod, num, den):
              f"as the data measured it ({how}) too: the residuals vouch for "
              f"the model only below {CROSSOVER_MOST:g} plant bandwidths")
             + f" (got {mmeas:.3f}; {mmod:.3f} on the model alone, on a log "
-            f"grid from {grid[0]:.1e} rad/sample)")
+            f"grid from {grid[0]:.1e} rad/sample)"
+            + _wild_words(response, den))
+
+
+def _wild_words(response, den):
+    """The margin note's words on the plant's poles that no data vouch for
+    (`wild_poles`), or ''."""
+    poles = np.roots(den) if np.size(den) > 1 else np.zeros(0)
+    wild = poles[wild_poles(poles, response[1])]
+    if not wild.size:
+        return ""
+    return (f"; the plant's pole(s) at {_fmt_roots(wild)} are all but "
+            f"undamped above the band the record measured reliably "
+            f"({response[1]:.3g} rad/sample): the margins hold them, which "
+            f"lowers the gains where no data vouch for the model (excite the "
+            f"plant up there to identify them)")
 
 
 def raised_words(num, den, C, info):

@@ -101,7 +101,6 @@ from .._checks import (MAX_ORDER, PLAIN_REALS, IdentificationWarning,
                        check_finite, check_int, check_nonnegative,
                        check_positive, check_real, check_signal)
 
-
 __all__ = ['ServoController', 'servo_controller']
 
 #: default share of the identified band the feedforward compensates, and
@@ -750,9 +749,10 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
     # a reference travelling 20 of its bands (and the compensation for
     # one travelling the record's output spread, which can be far less)
     checked = comp and result is not None
+    check = sdata.checked_model(model, response, notes)
     r = sd.design_reference(model, 20, dt) if checked else None
     if checked and band_by_default and band_fraction > 0 and \
-            not helps_on_model(ctrl, model,
+            not helps_on_model(ctrl, check,
                                [r, sd.record_reference(result, dt)]):
         # the compensation must at least help on the model it came from
         sc = scalar_index(ctrl)
@@ -771,18 +771,18 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         with warnings.catch_warnings(), inner():  # a failed result: warned
             warnings.simplefilter('ignore', IdentificationWarning)  # once
             return servo_controller(source, **{**asked, **kw})
-    own = (feedback_checked(ctrl, redo, model, mbar * model.L1 * model.L2,
+    own = (feedback_checked(ctrl, redo, check, mbar * check.L1 * check.L2,
                             r) if checked and feedback_from == 'auto'
            and P is lin_model else None)
     if own is not None:
         ctrl = own
     elif checked and feedforward_from == 'auto' and lin_model is not None:
-        ctrl = feedforward_checked(ctrl, redo, model, ff_model, r)
+        ctrl = feedforward_checked(ctrl, redo, check, ff_model, r)
     record = None if result is None else sd.record_reference(result, dt)
     moves = ([dict(feedback_from=f) for f in ('baseline', 'model')]
              if feedback_from == 'auto' and comp else [])
     if record is not None and outermost():
-        ctrl = bounded_checked(ctrl, redo, model, record, moves,
+        ctrl = bounded_checked(ctrl, redo, check, record, moves,
                                set_keywords(asked, _DEFAULTS))
     ctrl.reset()                # the checks ran it: it starts at rest
     return ctrl
