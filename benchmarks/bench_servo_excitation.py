@@ -14,6 +14,8 @@ with the defaults and runs them on the drive for ``sw.servo_reference``
 (1 mm of travel). Excitations (5 s unless said):
 
 - ``reference``: ``drive_reference``, and its 2 s and 20 s records;
+- ``small``: ``drive_reference`` at a tenth of its amplitude (the play
+  then dominates the record);
 - ``binary``: a random binary signal (+-1 rad, +-10 rad/s for the speed
   loop, switching after random holds of 50 to 300 ms);
 - ``multisine``: 25 cosines at random frequencies in 0.2 to 15 Hz (RMS
@@ -23,9 +25,11 @@ with the defaults and runs them on the drive for ``sw.servo_reference``
 
 It prints both designs' RMS errors, the sandwich's over the linear
 design's (overall, near reversals, input activity), the reversals in a
-hold's second half (hunting: 3 or more) and, with ``--raw``, the sandwich
-designed with its checks run around the raw identified model
-(`_servo_data.checked_model` off), the code before 2026-11-28.
+hold's second half (hunting: 3 or more) and, with ``--raw``, two designs
+as the code before 2026-11-28 made them: the sandwich with its checks
+run around the raw identified model (`_servo_data.checked_model` off),
+and both designs with no zero cancelled beside a pole in their inverses
+(`_servo_inverse.COINCIDENT` = 0).
 
 Run: python benchmarks/bench_servo_excitation.py [--seeds 2] [--raw]
                                                  [--kinds sweep,binary]
@@ -43,6 +47,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(__file__))
 import sandwichctl as sw                                   # noqa: E402
 from sandwichctl.design import _servo_data as sdata        # noqa: E402
+from sandwichctl.design import _servo_inverse as si        # noqa: E402
 from _timing import print_table                            # noqa: E402
 
 ORDERS = dict(na=2, nb=1, nc=2, nd=1, q1=1, q2=0)
@@ -50,7 +55,7 @@ LINEAR = dict(nb=3, nf=4, nk=1)
 DT = sw.data.DRIVE_DT
 #: (kind, seconds) of the estimation records
 RECORDS = (('reference', 2), ('reference', 5), ('reference', 20),
-           ('binary', 5), ('multisine', 5), ('sweep', 5))
+           ('small', 5), ('binary', 5), ('multisine', 5), ('sweep', 5))
 
 
 def _amplitude(loop, position, speed):
@@ -90,8 +95,12 @@ def reference(n, rng, loop):
     return sw.data.drive_reference(n, loop, rng=rng, dt=DT)
 
 
-KINDS = dict(reference=reference, binary=binary, multisine=multisine,
-             sweep=sweep)
+def small(n, rng, loop):
+    return 0.1 * reference(n, rng, loop)
+
+
+KINDS = dict(reference=reference, small=small, binary=binary,
+             multisine=multisine, sweep=sweep)
 
 
 def on_drive(ctrl, r, loop, play, seed):
@@ -116,6 +125,17 @@ def raw_design(res):
         sdata.checked_model = keep
 
 
+def unpaired_design(res):
+    """The default design with no zero cancelled beside a pole in its
+    inverses."""
+    keep = si.COINCIDENT
+    si.COINCIDENT = 0.0
+    try:
+        return sw.servo_controller(res)
+    finally:
+        si.COINCIDENT = keep
+
+
 def case(kind, seconds, loop, play, seed, raw):
     n = int(round(seconds / DT))
     u = KINDS[kind](n, np.random.default_rng(seed), loop)
@@ -129,6 +149,8 @@ def case(kind, seconds, loop, play, seed, raw):
                    'sandwich': lambda: sw.servo_controller(res)}
         if raw:
             designs['raw checks'] = lambda: raw_design(res)
+            designs['linear unpaired'] = lambda: unpaired_design(lin)
+            designs['sandwich unpaired'] = lambda: unpaired_design(res)
         r = sw.servo_reference(DT, 1e-3)
         got = {}
         for name, make in designs.items():
@@ -176,9 +198,13 @@ def main(argv=None):
                             f"{sand['activity'] / lin['activity']:.2f}",
                             'yes' if sand['damped'] else '']
                     if args.raw:
-                        raw = got['raw checks']
+                        for name in ('raw checks', 'sandwich unpaired'):
+                            raw = got[name]
+                            row.append(raw if isinstance(raw, str) else
+                                       f"{raw['rms'] / lin['rms']:.2f}")
+                        raw = got['linear unpaired']
                         row.append(raw if isinstance(raw, str) else
-                                   f"{raw['rms'] / lin['rms']:.2f}")
+                                   f"{raw['rms'] * 1e6:.1f}")
                     rows.append(row)
     print("Servo loops on the drive, designed from records of other "
           "excitations; servo_controller defaults, errors in um\n")
@@ -186,7 +212,8 @@ def main(argv=None):
             'success', 'linear', 'hunt', 'sandwich', 'hunt', 'RMS/lin',
             'near rev./lin', 'TV/lin', 'mode damped']
     if args.raw:
-        head.append('raw checks RMS/lin')
+        head += ['raw checks RMS/lin', 'unpaired RMS/lin',
+                 'linear unpaired']
     print_table(head, rows)
     print(f"\n{len(rows)} loops in {time.perf_counter() - start:.0f} s")
     for kind in dict.fromkeys(k for k, _ in ratios):

@@ -50,16 +50,10 @@ from .inverse import _fmt_roots
 from .loop import phase_margin
 from ._servo_kernel import ADAPT, BLEND
 from .references import servo_reference
+from ._servo_inverse import (AT_ONE, RINGING, SERIES_TOL,  # noqa: F401
+                             ZERO_RADIUS, at_one, coincident,
+                             preview_inverse, series_length)
 
-#: a zero this close to the unit circle or outside counts as unstable
-ZERO_RADIUS = 1.0
-#: zeros left of this real part make an inverse ring at the Nyquist
-#: frequency (sampling zeros); they keep only their DC gain
-RINGING = -0.5
-#: a pole this close to z = 1 is an integrator (`at_one`)
-AT_ONE = 1e-6
-#: truncation of the anticausal series of an unstable zero
-SERIES_TOL = 1e-3
 #: the most phase (rad) the poles of a plant may turn between
 #: neighbouring points of `frequency_grid`: each turns it by up to about
 #: a radian per rad/sample (a pole at 0, one sample of delay, by exactly
@@ -73,12 +67,6 @@ GRID_PHASE_STEP = 0.2
 #: wide) is narrower than the log grid's step there, in units of 1 - |p|
 PEAK_OFFSETS = np.r_[np.linspace(-3, 3, 61), np.logspace(0.5, 1.5, 6),
                      -np.logspace(0.5, 1.5, 6)]
-
-
-def at_one(roots):
-    """Which of the roots sit at z = 1 (within `AT_ONE`): the
-    integrators among poles."""
-    return np.abs(np.asarray(roots) - 1) < AT_ONE
 
 
 def frequency_grid(den, n=1500):
@@ -103,51 +91,6 @@ def frequency_grid(den, n=1500):
         return w
     extra = np.concatenate(parts[1:])
     return np.unique(np.r_[w, extra[(extra > w[0]) & (extra < w[-1])]])
-
-
-def series_length(zj):
-    """Samples of preview the anticausal series of :math:`1/(z - z_j)`
-    needs, its terms :math:`|z_j|^{-i}` cut below `SERIES_TOL`; inf for a
-    zero on the unit circle or a ringing one (real part below `RINGING`),
-    which only keep their DC gain."""
-    if abs(zj) > 1 + 1e-6 and np.real(zj) >= RINGING:
-        return int(np.ceil(np.log(SERIES_TOL) / -np.log(abs(zj))))
-    return np.inf
-
-
-def preview_inverse(num, den, kind='preview', max_preview=20):
-    """Numerator, denominator (descending powers of z) and delay d of the
-    preview inverse of num/den; also the zeros handled approximately."""
-    num = np.trim_zeros(np.asarray(num, float), 'f')
-    zeros = np.roots(num) if num.size > 1 else np.zeros(0)
-    ringing = (np.real(zeros) < RINGING) & (np.abs(zeros) < 1 - 1e-9)
-    unstable = (np.abs(zeros) >= ZERO_RADIUS - 1e-9) | ringing
-    stable_part = num[0] * np.atleast_1d(np.real(np.poly(zeros[~unstable])))
-    q = np.ones(1)
-    dc_only, kept = [], []
-    nu = zeros[unstable]
-    if kind == 'zpetc' and nu.size:
-        poly_u = np.real(np.poly(nu))
-        q = poly_u[::-1] / np.polyval(poly_u, 1.0) ** 2
-    elif nu.size:
-        for zj in nu:
-            count = series_length(zj)
-            if count > max_preview:
-                dc_only.append(zj)
-                stable_part = stable_part * (1.0 - zj)
-                continue
-            kept.append(zj)
-            # 1/(z - zj) ~ -sum_i z^i / zj^(i+1), highest power first
-            series = -np.array([zj ** -(i + 1) for i in range(count)])[::-1]
-            q = np.convolve(q, series)
-        if kept:
-            q = q / (np.polyval(np.poly(kept), 1.0) * np.polyval(q, 1.0))
-        q = np.real(q)
-    stable_part = np.real(stable_part)
-    n_num = np.convolve(den, q)
-    delay = n_num.size - stable_part.size
-    n_den = np.concatenate([stable_part, np.zeros(max(delay, 0))])
-    return n_num, n_den, max(delay, 0), dc_only
 
 
 #: an identified sandwich's feedforward that inverts its own mbar L1 L2 is

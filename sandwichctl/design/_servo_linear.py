@@ -221,9 +221,16 @@ def ff_note(kind, preview, approx, linear_note, smooth, ratio):
                  f" taps ({smooth} of the samples of preview): unsmoothed "
                  f"it asks for {ratio:.3g} times the input activity of the "
                  f"baseline's inverse (more than {FF_ACTIVITY:g})")
+    approx, pairs = approx
     if approx:
         text += (f"; zero(s) at {_fmt_roots(np.array(approx))} kept by "
                  f"their DC gain only")
+    if pairs:
+        text += (f"; zero(s) at {_fmt_roots(np.array([z for z, _ in pairs]))}"
+                 f" cancelled with the pole(s) beside them at "
+                 f"{_fmt_roots(np.array([p for _, p in pairs]))} (their DC "
+                 f"gain alone would raise the inverse's gain where the pair "
+                 f"cancels)")
     if linear_note:
         text += f"; {linear_note}"
     return text
