@@ -49,9 +49,8 @@ import sandwichctl as sw                                   # noqa: E402
 from sandwichctl.design import _servo_data as sdata        # noqa: E402
 from sandwichctl.design import _servo_inverse as si        # noqa: E402
 from _timing import print_table                            # noqa: E402
+from bench_servo import LINEAR, ORDERS, run                # noqa: E402
 
-ORDERS = dict(na=2, nb=1, nc=2, nd=1, q1=1, q2=0)
-LINEAR = dict(nb=3, nf=4, nk=1)
 DT = sw.data.DRIVE_DT
 #: (kind, seconds) of the estimation records
 RECORDS = (('reference', 2), ('reference', 5), ('reference', 20),
@@ -103,17 +102,6 @@ KINDS = dict(reference=reference, small=small, binary=binary,
              multisine=multisine, sweep=sweep)
 
 
-def on_drive(ctrl, r, loop, play, seed):
-    """`sw.servo_metrics` of ctrl in closed loop on the drive."""
-    drive = sw.data.ServoDrive(loop, play, DT, seed=seed, n=r.size)
-    with warnings.catch_warnings():
-        warnings.simplefilter('ignore')
-        out = sw.closed_loop_response(drive, r, ctrl)
-    res = sw.data.DRIVE_PARAMETERS['resolution'][0]
-    return sw.servo_metrics(r, out.outputs[0], out.outputs[1], DT,
-                            deadband=1.5 * res)
-
-
 def raw_design(res):
     """The sandwich's default design with its checks around the raw
     identified model."""
@@ -159,7 +147,7 @@ def case(kind, seconds, loop, play, seed, raw):
             except ValueError as exc:
                 got[name] = f"refused: {exc}"[:80]
                 continue
-            got[name] = on_drive(ctrl, r, loop, play, seed + 500)
+            got[name] = run(ctrl, r, loop, play, DT, {}, seed + 500)
             got[name]['damped'] = any('damped to radius' in note
                                       for note in ctrl.notes)
     return res, got

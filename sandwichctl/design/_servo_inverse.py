@@ -54,7 +54,8 @@ def coincident(num, den):
     zeros = list(np.roots(num)) if num.size > 1 else []
     poles = list(np.roots(den)) if den.size > 1 else []
     pairs = []
-    for z0 in [z for z in zeros if abs(z) >= 1 - 1e-9 and z.imag >= 0]:
+    for z0 in [z for z in zeros
+               if abs(z) >= ZERO_RADIUS - 1e-9 and z.imag >= 0]:
         free = [p for p in poles if not at_one(p)]
         p = min(free, key=lambda q: abs(q - z0), default=None)
         if p is None or not (abs(p - z0) < COINCIDENT * abs(1 - p)
