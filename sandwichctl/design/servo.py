@@ -49,13 +49,12 @@ it into a one-sample spike that saturates the drive.
 How much of the band: online
 ----------------------------
 The play the loop meets is not the band identified. For an identified
-sandwich the controller estimates the band path's gain from its own
-error, by recursive least squares: the regressor is the band path's
-output through the design plant's process sensitivity :math:`P/(1+CP)`,
-the error's sensitivity to that gain. The share of the other linear
-model's feedforward (the baseline's or the sandwich's) is estimated with
-it. Both are deterministic and bounded, and ``reset()`` restarts them
-(``adapt``).
+sandwich the controller estimates the band path's gain from its own error,
+by recursive least squares: the regressor is the band path's output
+through the design plant's process sensitivity :math:`P/(1+CP)`, the
+error's sensitivity to that gain; the share of the other linear model's
+feedforward (the baseline's or the sandwich's) is estimated with it. Both
+are deterministic and bounded; ``reset()`` restarts them (``adapt``).
 
 Hunting: online
 ---------------
@@ -539,7 +538,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         lin_model = (result.linear.get('model') if result is not None
                      and isinstance(getattr(result, 'linear', None), dict)
                      else None)
-        lin_model = sl.cancel_drift(lin_model, notes)
+        lin_model = sdata.nyquist_tamed(sl.cancel_drift(lin_model, notes),
+                                        response, notes)
         integrating = sl.integrates(model.L1)
         ff_zeros = np.concatenate([model.L1.zeros(), model.L2.zeros()])
         P, pid, ff_model, linear_note, lin_model = sl.linear_part(
