@@ -54,7 +54,9 @@ linear part mbar L1 L2, it also runs the sandwich design with
 inverted, the same feedback and band) and prints both ratios. With
 ``--mismatch`` it also runs both designs on drives that are not the one
 identified (`MISMATCH`: a heavier load with less friction, a stiffer
-inner loop, less and more play) and counts the hunting there.
+inner loop, less and more play) and counts the hunting there;
+``--play-factors 2,3`` runs them on drives with the play scaled by each
+factor instead.
 ``--crossover X`` sets the PID's crossover limit of a model without data
 (`CROSSOVER_LIMIT['pid']`), ``--fixed-crossover`` holds every design
 at it (no extension from the residuals of the record), and ``--peak-t M``
@@ -63,8 +65,9 @@ bounds the PID's complementary sensitivity at M instead of 1
 
 Run: python benchmarks/bench_servo.py [--seeds 2] [--random 8] [--sweep]
      [--seed0 2 --random0 8] [--feedforward zpetc] [--bands]
-     [--to-margin] [--sources] [--mismatch] [--crossover 2]
-     [--fixed-crossover] [--peak-t 1.15] [--scales 1.25,1.5,2]
+     [--to-margin] [--sources] [--mismatch] [--play-factors 2,3]
+     [--crossover 2] [--fixed-crossover] [--peak-t 1.15]
+     [--scales 1.25,1.5,2]
      [--no-raise] [--no-guard]
 """
 
@@ -205,6 +208,9 @@ def main():
     ap.add_argument('--mismatch', action='store_true',
                     help='also run both designs on drives that differ from '
                     'the one identified (MISMATCH)')
+    ap.add_argument('--play-factors', default=None,
+                    help='comma-separated factors: --mismatch on drives '
+                    'with the play scaled by each, instead of MISMATCH')
     ap.add_argument('--crossover', type=float, default=None,
                     help="the PID's crossover limit in plant bandwidths "
                     "(CROSSOVER_LIMIT['pid'] of sandwichctl.design."
@@ -234,6 +240,11 @@ def main():
                     "residuals of the data, and no PID raised past it), "
                     "to compare with the default")
     args = ap.parse_args()
+    if args.play_factors:
+        global MISMATCH
+        MISMATCH = tuple((f"play x{f:g}", f, {}) for f in
+                         map(float, args.play_factors.split(',')))
+        args.mismatch = True
     if args.crossover is not None:
         sd.CROSSOVER_LIMIT['pid'] = args.crossover
     if args.peak_t is not None:
