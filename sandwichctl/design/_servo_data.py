@@ -156,6 +156,7 @@ def checked_model(model, response, notes):
 
 
 def _poles(block):
+    """The poles of a discrete SISO transfer function (none if static)."""
     den = sd.tf_arrays(block)[1]
     return np.roots(den) if den.size > 1 else np.zeros(0)
 
