@@ -3,6 +3,7 @@ model (`design._servo_checks`): here the feedback designed on the linear
 baseline, which gives way to the one designed on the sandwich's mbar L1 L2
 where the baseline's loop diverges around the sandwich."""
 
+import types
 import warnings
 
 import numpy as np
@@ -11,7 +12,8 @@ import pytest
 
 import sandwichctl as sw
 from sandwichctl.design import _servo_checks as sc, _servo_data as sdata, \
-    _servo_design
+    _servo_design, _servo_linear
+from sandwichctl.design.servo import check_plant_tf
 
 
 @pytest.fixture(scope='module')
@@ -358,7 +360,8 @@ def test_a_small_speed_record_designs_the_pid_without_its_nyquist_mode():
                                       rng=np.random.default_rng(0), dt=dt)
     res, ctrl, c_lin = _speed_designs(u)
     assert res.success
-    assert any("real modes at the Nyquist" in note for note in ctrl.notes)
+    assert any("real modes at the Nyquist" in note and "on the baseline as "
+               "fitted too" in note for note in ctrl.notes)
     r = sw.servo_reference(dt, 1e-3)
     got = []
     for c in (ctrl, c_lin):
@@ -368,3 +371,28 @@ def test_a_small_speed_record_designs_the_pid_without_its_nyquist_mode():
                                     * sw.data.DRIVE_PARAMETERS[
                                         'resolution'][0]))
     assert got[0]['rms'] <= got[1]['rms'] and got[0]['hunting'] < 3
+
+
+def test_a_real_nyquist_mode_the_pid_needs_is_kept():
+    """A baseline whose pole at -0.99 is the plant's own (an aggressive
+    digital loop rings at the Nyquist frequency), above the band the data
+    measured: the PID designed with it damped does not meet the margin on
+    the baseline as fitted (it runs away on such a plant), so the design
+    keeps the fitted baseline, and the notes say so."""
+    dt = 0.001
+    base = ct.tf([0.02, 0.0], np.polymul([1.0, -0.95], [1.0, 0.99]), dt)
+    model = sw.SandwichSystem(ct.tf([1.0, 0.0], [1.0, 0.99], dt),
+                              sw.Backlash(0.02, 0.02, 0.01, 0.01, dt=dt),
+                              ct.tf([1.0, 0.0], [1.0, -0.95], dt))
+    result = types.SimpleNamespace(fit=90.0, linear={'fit': 89.0})
+    notes, info = [], {}
+    P, pid, *_ = _servo_linear.tamed_part(
+        model, result, base, 'auto', 'auto', False, np.zeros(0), 25, 0.6,
+        check_plant_tf, None, None, response=(None, 0.03), notes=notes,
+        info=info)
+    assert P is base
+    num, den = check_plant_tf('the baseline', base)
+    margin, _, _, radius = _servo_design.loop_margins(
+        num, den, _servo_design.pid_tf(*pid, dt))
+    assert radius < 1 and margin >= 0.59
+    assert len(notes) == 1 and "kept as fitted" in notes[0]

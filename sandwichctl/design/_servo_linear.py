@@ -1,8 +1,10 @@
 """Which linear model a sandwich's servo design is built on: the feedback
 on the result's linear baseline or on the sandwich's mbar L1 L2, the
-feedforward inverting the one or the other (`linear_part`), the drift
-terms (a pole at z = 1 beside a zero) cancelled from a model first, and
-the design's note on the linear feedforward (`ff_note`)."""
+feedforward inverting the one or the other (`linear_part`), the baseline
+with its real modes at the Nyquist frequency damped where the PID so
+designed holds on the baseline as fitted (`tamed_part`), the drift terms
+(a pole at z = 1 beside a zero) cancelled from a model first, and the
+design's note on the linear feedforward (`ff_note`)."""
 
 import numpy as np
 import control as ct
@@ -11,7 +13,9 @@ from ..model.sandwich import SandwichSystem
 from .._checks import PINNED
 from .inverse import _fmt_roots
 from ._servo_design import (FF_ACTIVITY, RINGING, at_one, design_pid,
-                            low_frequency_sign, series_length, tf_arrays)
+                            loop_margins, low_frequency_sign, pid_tf,
+                            series_length, tf_arrays)
+from ._servo_data import nyquist_tamed
 
 
 #: the sandwich's linear part drives the feedforward of a non-integrating
@@ -141,6 +145,41 @@ def linear_part(model, result, lin_model, feedback_from, feedforward_from,
             + "; feedforward inverts the " + ("sandwich's mbar L1 L2" if use
                                               else "baseline") + f": {why}")
     return (lin_model if pid is not None else own), pid, use, note, lin_model
+
+
+#: `tamed_part` keeps the PID designed on the damped baseline when its
+#: modulus margin on the baseline as fitted is at least this share of the
+#: one asked
+TAMED_MARGIN = 0.98
+
+
+def tamed_part(model, result, lin_model, *args, response, notes, info):
+    """`linear_part` (the same arguments) on the baseline with its real
+    modes at the Nyquist frequency damped (`_servo_data.nyquist_tamed`),
+    where the PID so designed also meets the modulus margin (`TAMED_MARGIN`)
+    on the baseline as fitted, told in `notes`; else `linear_part` on the
+    fitted baseline. Such a pole may be an artefact of the fit (a record
+    at a tenth of the usual amplitude: its PD held the mode and tracked
+    the drive 1.21 times worse than the linear design) or the plant's
+    (an aggressive digital inner loop rings at the Nyquist frequency): a
+    PID designed without a real one can run away on the plant."""
+    said, trial = [], {}
+    tamed = nyquist_tamed(lin_model, response, said)
+    if tamed is not lin_model:
+        got = linear_part(model, result, tamed, *args, info=trial)
+        if got[0] is tamed and got[1] is not None:
+            num, den = args[6]('the baseline', lin_model)
+            margin, _, _, radius = loop_margins(
+                num, den, pid_tf(*got[1], lin_model.dt))
+            if radius < 1 and margin >= TAMED_MARGIN * args[5]:
+                info.update(trial)
+                notes.append(f"{said[0]}; its PID meets modulus margin "
+                             f"{margin:.3g} on the baseline as fitted too")
+                return got
+        notes.append("the linear baseline's real modes at the Nyquist "
+                     "frequency kept as fitted: a PID designed with them "
+                     "damped would not meet the margin on the baseline")
+    return linear_part(model, result, lin_model, *args, info=info)
 
 
 #: a pole at z = 1 with a zero this close to it is a drift term of the

@@ -538,14 +538,14 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         lin_model = (result.linear.get('model') if result is not None
                      and isinstance(getattr(result, 'linear', None), dict)
                      else None)
-        lin_model = sdata.nyquist_tamed(sl.cancel_drift(lin_model, notes),
-                                        response, notes)
+        lin_model = sl.cancel_drift(lin_model, notes)
         integrating = sl.integrates(model.L1)
         ff_zeros = np.concatenate([model.L1.zeros(), model.L2.zeros()])
-        P, pid, ff_model, linear_note, lin_model = sl.linear_part(
+        P, pid, ff_model, linear_note, lin_model = sl.tamed_part(
             model, result, lin_model, feedback_from, feedforward_from,
             integrating, ff_zeros, max_preview, mm, check_plant_tf,
-            lambda n, d: limit(n, d)[0], measured, info)
+            lambda n, d: limit(n, d)[0], measured, response=response,
+            notes=notes, info=info)
     else:
         P, linear_note, pid = model, None, None
         for key, choice in (('feedforward_from', feedforward_from),
