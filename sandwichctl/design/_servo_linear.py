@@ -176,9 +176,9 @@ def tamed_part(model, result, lin_model, *args, response, notes, info):
                 notes.append(f"{said[0]}; its PID meets modulus margin "
                              f"{margin:.3g} on the baseline as fitted too")
                 return got
-        notes.append("the linear baseline's real modes at the Nyquist "
-                     "frequency kept as fitted: a PID designed with them "
-                     "damped would not meet the margin on the baseline")
+            notes.append("the linear baseline's real modes at the Nyquist "
+                         "frequency kept as fitted: a PID designed with "
+                         "them damped would not meet the margin on it")
     return linear_part(model, result, lin_model, *args, info=info)
 
 
