@@ -142,8 +142,8 @@ def checked_model(model, response, notes):
     if response is None or not isinstance(model, SandwichSystem):
         return model
     moved = []
-    L1 = _tamed(model.L1, wild_poles(_poles(model.L1), response[1]), moved)
-    L2 = _tamed(model.L2, wild_poles(_poles(model.L2), response[1]), moved)
+    L1, L2 = (_tamed(block, lambda p: wild_poles(p, response[1]), moved)
+              for block in (model.L1, model.L2))
     if not moved:
         return model
     notes.append(
@@ -155,19 +155,20 @@ def checked_model(model, response, notes):
     return SandwichSystem(L1, model.backlash, L2, name=model.name)
 
 
-def _poles(block):
-    """The poles of a discrete SISO transfer function (none if static)."""
-    den = sd.tf_arrays(block)[1]
-    return np.roots(den) if den.size > 1 else np.zeros(0)
+def _roots(poly):
+    """The roots of a polynomial (descending powers; none if constant)."""
+    return np.roots(poly) if np.size(poly) > 1 else np.zeros(0)
 
 
-def _tamed(block, wild, moved):
-    """`block` with its poles where `wild` is true damped to radius TAMED,
-    their angle and the block's DC gain kept; they are added to `moved`."""
+def _tamed(block, select, moved):
+    """`block` with the poles `select` picks (a mask of the poles) damped
+    to radius TAMED, their angle and the block's DC gain kept; they are
+    added to `moved`."""
+    num, den = sd.tf_arrays(block)
+    poles = _roots(den)
+    wild = select(poles)
     if not np.any(wild):
         return block
-    num, den = sd.tf_arrays(block)
-    poles = np.roots(den)
     moved.extend(poles[wild])
     new = np.where(wild, TAMED * np.exp(1j * np.angle(poles)), poles)
     dc = np.prod((1 - new[wild]) / (1 - poles[wild]))
@@ -178,18 +179,19 @@ def nyquist_tamed(baseline, response, notes):
     """The linear `baseline` a sandwich's PID is designed on, with its real
     poles on the negative axis that no data vouch for (`wild_poles`)
     damped like `checked_model`'s, told in `notes`. Such a pole is an
-    oscillation at exactly the Nyquist frequency, which a sampled physical
-    plant hardly has: the fit uses its low-frequency tail. The baseline of
+    oscillation at exactly the Nyquist frequency, which the fit may have
+    placed from its low-frequency tail alone (a digital inner loop tuned
+    aggressively can have one too: `_servo_linear.tamed_part` checks the
+    PID on the baseline as fitted). The baseline of
     a speed loop identified from a record at a tenth of the usual
     amplitude had one at -0.9869; the PD designed on it held that mode, its
     derivative gain fell to 9.8 and the loop tracked the drive at 16.3 um,
     1.21 times the linear design's error (6.5 um with the pole damped)."""
     if response is None or not isinstance(baseline, ct.TransferFunction):
         return baseline
-    poles, moved = _poles(baseline), []
-    wild = wild_poles(poles, response[1]) & (np.abs(poles.imag) < 1e-9) \
-        & (poles.real < 0)
-    baseline = _tamed(baseline, wild, moved)
+    moved = []
+    baseline = _tamed(baseline, lambda p: wild_poles(p, response[1])
+                      & (np.abs(p.imag) < 1e-9) & (p.real < 0), moved)
     if moved:
         notes.append(
             f"the PID is designed on the linear baseline with its pole(s) at "
@@ -291,7 +293,7 @@ def margin_words(data, response, mmeas, mmod, num, den):
 def _wild_words(response, den):
     """The margin note's words on the plant's poles that no data vouch for
     (`wild_poles`), or ''."""
-    poles = np.roots(den) if np.size(den) > 1 else np.zeros(0)
+    poles = _roots(den)
     wild = poles[wild_poles(poles, response[1])]
     if not wild.size:
         return ""

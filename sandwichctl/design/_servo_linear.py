@@ -153,7 +153,9 @@ def linear_part(model, result, lin_model, feedback_from, feedforward_from,
 TAMED_MARGIN = 0.98
 
 
-def tamed_part(model, result, lin_model, *args, response, notes, info):
+def tamed_part(model, result, lin_model, feedback_from, feedforward_from,
+               integrating, zeros, max_preview, mm, check_plant, limit,
+               measured, *, response, notes, info):
     """`linear_part` (the same arguments) on the baseline with its real
     modes at the Nyquist frequency damped (`_servo_data.nyquist_tamed`),
     where the PID so designed also meets the modulus margin (`TAMED_MARGIN`)
@@ -163,15 +165,17 @@ def tamed_part(model, result, lin_model, *args, response, notes, info):
     the drive 1.21 times worse than the linear design) or the plant's
     (an aggressive digital inner loop rings at the Nyquist frequency): a
     PID designed without a real one can run away on the plant."""
+    rest = (feedback_from, feedforward_from, integrating, zeros,
+            max_preview, mm, check_plant, limit, measured)
     said, trial = [], {}
     tamed = nyquist_tamed(lin_model, response, said)
     if tamed is not lin_model:
-        got = linear_part(model, result, tamed, *args, info=trial)
+        got = linear_part(model, result, tamed, *rest, info=trial)
         if got[0] is tamed and got[1] is not None:
-            num, den = args[6]('the baseline', lin_model)
+            num, den = check_plant('the baseline', lin_model)
             margin, _, _, radius = loop_margins(
                 num, den, pid_tf(*got[1], lin_model.dt))
-            if radius < 1 and margin >= TAMED_MARGIN * args[5]:
+            if radius < 1 and margin >= TAMED_MARGIN * mm:
                 info.update(trial)
                 notes.append(f"{said[0]}; its PID meets modulus margin "
                              f"{margin:.3g} on the baseline as fitted too")
@@ -179,7 +183,7 @@ def tamed_part(model, result, lin_model, *args, response, notes, info):
             notes.append("the linear baseline's real modes at the Nyquist "
                          "frequency kept as fitted: a PID designed with "
                          "them damped would not meet the margin on it")
-    return linear_part(model, result, lin_model, *args, info=info)
+    return linear_part(model, result, lin_model, *rest, info=info)
 
 
 #: a pole at z = 1 with a zero this close to it is a drift term of the
