@@ -131,8 +131,9 @@ def test_search_options_are_checked(option, value):
 
 def test_relocations_move_one_root_and_keep_the_spread_of_x():
     """Each candidate differs from the start in one real root or one
-    conjugate pair of L1's poles or zeros; the slopes and widths follow
-    the spread of x = L1[u], so the backlash output keeps its size."""
+    conjugate pair of L1's poles or zeros, or in its two real zeros moved
+    together to a pair; the slopes and widths follow the spread of x =
+    L1[u], so the backlash output keeps its size."""
     from sandwichctl.identification._starts import relocations, l1_std
     rng = np.random.default_rng(3)
     st = Parametrisation((3, 2, 2, 1, 1, 1))
@@ -146,8 +147,15 @@ def test_relocations_move_one_root_and_keep_the_spread_of_x():
     phi[ib:ib + 2] = np.poly([0.4, -0.7])[1:]
     phi[ib + 2:] = [0.3]
     cands = relocations(st, phi, u)
-    # 2 pole units (7 real + 8 pair targets) and 2 real zeros (7 each)
-    assert len(cands) == 7 + 8 + 7 + 7
+    # 2 pole units (7 real + 8 pair targets), 2 real zeros (7 each), and
+    # those two zeros together (6 pair targets)
+    assert len(cands) == 7 + 8 + 7 + 7 + 6
+    from sandwichctl.identification._starts import ZEROS_PAIR
+    pairs = [np.sort_complex(np.roots(np.r_[1.0, c[ib:ib + 2]]))
+             for c in cands[-6:]]
+    want = [np.sort_complex([r * np.exp(1j * w), r * np.exp(-1j * w)])
+            for r, w in ZEROS_PAIR]
+    np.testing.assert_allclose(pairs, want, atol=1e-12)
     s0 = l1_std(st, phi, u)
     for cand in cands:
         np.testing.assert_array_equal(cand[:st.nc_free], phi[:st.nc_free])
@@ -161,6 +169,42 @@ def test_relocations_move_one_root_and_keep_the_spread_of_x():
                                    phi[st.im:st.im + 2], rtol=1e-12)
         np.testing.assert_allclose(cand[st.im + 2:st.im + 4] / ratio,
                                    phi[st.im + 2:st.im + 4], rtol=1e-12)
+
+
+def test_a_pole_all_but_cancelled_by_a_zero_moves_with_it():
+    """A pole pair of L1 that a zero pair all but cancels is moved with
+    that zero pair to each pair of the poles' grid: the same cancellation
+    elsewhere, the rest of L1 kept, the spread of x too."""
+    from sandwichctl.identification._starts import (
+        POLES_PAIR, ZEROS_PAIR, l1_std, relocations)
+    rng = np.random.default_rng(5)
+    st = Parametrisation((3, 2, 1, 0, 1, 0))
+    u = [rng.standard_normal(800)]
+    phi = np.zeros(st.size)
+    phi[:st.nc_free] = [-0.5]
+    pair = np.array([0.871 + 0.108j, 0.871 - 0.108j])
+    phi[st.nc_free:st.im] = np.real(np.poly(np.r_[pair, 0.647]))[1:]
+    phi[st.im:st.im + 4] = [0.8, 1.1, 0.2, 0.3]
+    ib = st.im + 4
+    phi[ib:ib + 2] = np.real(np.poly(pair * 1.01))[1:]
+    cands = relocations(st, phi, u)
+    moved = cands[-len(POLES_PAIR):]
+    # every unit alone (2 pole units, 1 zero pair) and the cancelling pair
+    assert len(cands) == (7 + 8) + len(ZEROS_PAIR) + len(POLES_PAIR)
+    s0 = l1_std(st, phi, u)
+    for cand, (r, w) in zip(moved, POLES_PAIR):
+        new = np.sort_complex([r * np.exp(1j * w), r * np.exp(-1j * w)])
+        poles = np.sort_complex(np.roots(np.r_[1.0, cand[st.nc_free:st.im]]))
+        zeros = np.sort_complex(np.roots(np.r_[1.0, cand[ib:ib + 2]]))
+        np.testing.assert_allclose(zeros, new, atol=1e-12)
+        assert np.min(np.abs(poles - 0.647)) < 1e-9
+        assert np.sum(np.min(np.abs(poles[:, None] - new[None, :]), 0)
+                      < 1e-6) == 2
+        assert l1_std(st, cand, u) * cand[st.im] == pytest.approx(
+            s0 * phi[st.im], rel=1e-12)
+    # zeros further than CANCELLED from the poles: no such move
+    phi[ib:ib + 2] = np.real(np.poly(pair * 1.2))[1:]
+    assert len(relocations(st, phi, u)) == (7 + 8) + len(ZEROS_PAIR)
 
 
 def test_relocations_leave_the_valley_of_a_wrong_l1_pole():

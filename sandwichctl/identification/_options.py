@@ -117,7 +117,7 @@ class OEOptions(_Options):
     refits: int = 2
     max_splits: int = 16
     hops: int = 4
-    relocate: int = 1
+    relocate: int = 3
     smooth: bool = True
     screen_samples: int = 2000
 

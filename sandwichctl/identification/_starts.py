@@ -19,7 +19,11 @@ kind is one function here, in the order of the search's steps
   L1 (a real pole sitting on a copy of one of L2's poles, a zero on the
   wrong side of the origin); small perturbations fall back into the same
   valley, so the root is put somewhere else on a coarse grid over the
-  disk (and, for zeros, beyond it), with the spread of x = L1[u] kept;
+  disk (and, for zeros, beyond it), with the spread of x = L1[u] kept.
+  Two real roots where the plant has a complex pair, and a pole of L1
+  all but cancelled by a zero, are minima of the same kind that no
+  single root's move leaves: two real roots are moved together onto the
+  grid's pairs, and a cancelling pole and zero together onto each point;
 - step 10 and `refine`'s multi-start, `perturb`: the one random
   perturbation;
 - `admissible`: any start moved into the domain.
@@ -275,37 +279,93 @@ def _targets(unit, reals, pairs):
             for r, w in pairs]
 
 
+def _root_units(phi, span):
+    """The root units (`_units`) of the monic polynomial in phi[lo:hi],
+    span = (lo, hi); None if it has none or they are not finite."""
+    coeffs = phi[span[0]:span[1]]
+    if coeffs.size == 0:
+        return None
+    with np.errstate(all='ignore'):
+        roots = np.roots(np.r_[1.0, coeffs])
+    return _units(roots) if np.all(np.isfinite(roots)) else None
+
+
+def _rescaled(st, cand, u, s0):
+    """cand with the slopes and widths scaled so that x = L1[u] keeps the
+    spread s0; None if it is not finite."""
+    ratio = l1_std(st, cand, u) / s0
+    cand[st.im:st.im + 2] /= ratio
+    cand[st.im + 2:st.im + 4] *= ratio
+    return cand if np.all(np.isfinite(cand)) else None
+
+
 def _moved(st, phi, u, span, grid):
     """Copies of phi with one root unit of the monic polynomial in
     phi[lo:hi], span = (lo, hi), moved to each target of the grid =
-    (reals, pairs) (x's spread kept)."""
+    (reals, pairs), and with every two real roots moved together to each
+    pair of the grid (x's spread kept)."""
     (lo, hi), (reals, pairs) = span, grid
-    coeffs = phi[lo:hi]
-    if coeffs.size == 0:
+    units = _root_units(phi, span)
+    if units is None:
         return []
-    with np.errstate(all='ignore'):
-        roots = np.roots(np.r_[1.0, coeffs])
-    if not np.all(np.isfinite(roots)):
-        return []
-    units = _units(roots)
     s0 = l1_std(st, phi, u)
+    single = [i for i, unit in enumerate(units) if unit.size == 1]
+    moves = ([([i], _targets(unit, reals, pairs))
+              for i, unit in enumerate(units)]
+             + [(list(ij), _targets(np.zeros(2), reals, pairs))
+                for ij in itertools.combinations(single, 2)])
     out = []
-    for i, unit in enumerate(units):
-        rest = [units[j] for j in range(len(units)) if j != i]
-        for new in _targets(unit, reals, pairs):
+    for which, targets in moves:
+        rest = [units[j] for j in range(len(units)) if j not in which]
+        for new in targets:
             cand = phi.copy()
             cand[lo:hi] = _coefficients(np.concatenate(rest + [new]))
-            ratio = l1_std(st, cand, u) / s0
-            cand[st.im:st.im + 2] /= ratio
-            cand[st.im + 2:st.im + 4] *= ratio
-            if np.all(np.isfinite(cand)):
+            cand = _rescaled(st, cand, u, s0)
+            if cand is not None:
+                out.append(cand)
+    return out
+
+
+#: a pole unit and a zero unit of L1 cancel when no root of one lies
+#: further than CANCELLED (relative to the largest modulus, at least 1)
+#: from its match in the other
+CANCELLED = 0.05
+
+
+def _cancelled(st, phi, u, poles, zeros):
+    """Copies of phi with each pole unit of L1 that a zero unit all but
+    cancels (`CANCELLED`) moved, with that zero unit, to each target of
+    the poles' grid: the same cancellation elsewhere, from where the pair
+    can part (x's spread kept). `poles` and `zeros` are their spans."""
+    pu, zu = _root_units(phi, poles), _root_units(phi, zeros)
+    if pu is None or zu is None:
+        return []
+    s0 = l1_std(st, phi, u)
+    out = []
+    for (i, p), (j, z) in itertools.product(enumerate(pu), enumerate(zu)):
+        if p.size != z.size or np.max(np.abs(
+                np.sort_complex(p) - np.sort_complex(z))) > CANCELLED * max(
+                    1.0, np.max(np.abs(p))):
+            continue
+        p_rest = [pu[k] for k in range(len(pu)) if k != i]
+        z_rest = [zu[k] for k in range(len(zu)) if k != j]
+        for new in _targets(p, POLES_REAL, POLES_PAIR):
+            cand = phi.copy()
+            cand[poles[0]:poles[1]] = _coefficients(
+                np.concatenate(p_rest + [new]))
+            cand[zeros[0]:zeros[1]] = _coefficients(
+                np.concatenate(z_rest + [new]))
+            cand = _rescaled(st, cand, u, s0)
+            if cand is not None:
                 out.append(cand)
     return out
 
 
 def relocations(st, phi, u):
     """Candidate starts: phi with one real root or conjugate pair of L1's
-    free poles or of its zeros moved to a grid point.
+    free poles or of its zeros moved to a grid point, two real ones moved
+    together to a conjugate pair of the grid, or a pole and the zero that
+    all but cancels it moved together to a point of the poles' grid.
 
     Parameters
     ----------
@@ -321,10 +381,10 @@ def relocations(st, phi, u):
     list of ndarray
         The moved vectors (not yet checked for admissibility).
     """
-    ib = st.im + 4
-    return (_moved(st, phi, u, (st.nc_free, st.im), (POLES_REAL, POLES_PAIR))
-            + _moved(st, phi, u, (ib, ib + st.o[1]),
-                     (ZEROS_REAL, ZEROS_PAIR)))
+    poles, zeros = (st.nc_free, st.im), (st.im + 4, st.im + 4 + st.o[1])
+    return (_moved(st, phi, u, poles, (POLES_REAL, POLES_PAIR))
+            + _moved(st, phi, u, zeros, (ZEROS_REAL, ZEROS_PAIR))
+            + _cancelled(st, phi, u, poles, zeros))
 
 
 def opened(st, phi, u, widths):

@@ -183,8 +183,8 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         tol (1e-8), min_fit (5, percent), max_splits (16: most pole/zero
         splits of the linear fit screened), sp_iter (15), sp_starts (4),
         n_random (6), seed (0), refits (2: L2 re-fits per refined
-        start), relocate (1: rounds of moving one root of L1 across the
-        disk), smooth (True: a path through smoothed backlashes), hops
+        start), relocate (3: rounds of moving roots of L1 across the
+        disk, while a round lowers the cost), smooth (True: a path through smoothed backlashes), hops
         (4: perturbed restarts from the best), screen_samples
         (2000: the short screening runs use this many leading samples;
         the refinements use all of them); the
