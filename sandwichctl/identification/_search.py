@@ -612,23 +612,17 @@ class Search:
     def step9_relocations(self, best):
         """Step 9, one round: every relocated start (`_starts.relocations`)
         gets L2 re-fitted and a short run on the leading samples; the best
-        `RELOCATE_KEEP` converge. The best of them if it lowers the cost,
-        else `best` itself."""
-        st, us, ys = self.heads[best['sign']]
-        opt, starts = self.opt, []
+        `RELOCATE_KEEP` converge. The best of them if it lowers the cost
+        and has no zero on the search bound where `best` has none (the
+        algorithm page, step 9), else `best` itself."""
+        (st, us, ys), opt, starts = self.heads[best['sign']], self.opt, []
         for phi in relocations(st, best['phi'], us):
             refit = refit_l2(st, phi, us, ys, RELOCATE_REFIT_ITER, opt.tol)
-            phi = phi if refit is None else refit
-            if st.stable(phi):
-                starts.append(phi)
+            starts.append(phi if refit is None else refit)
+        starts = [phi for phi in starts if st.stable(phi)]
         short = sorted((lm(st, phi, us, ys, opt.screen_iter // 2, opt.tol)
                         for phi in starts), key=lambda out: out['cost'])
-        # a move that ends with a zero on the search bound, where the best
-        # has none, trades a sound model for a degenerate one (step 11):
-        # random drive 5 of benchmarks/bench_drive.py gained 0.0005
-        # points of fit that way, and its verdict turned to a failure
-        sound = not st.zeros_at_bound(best['phi'])
-        found = best
+        sound, found = not st.zeros_at_bound(best['phi']), best
         for out in ordered_map(lambda out: self.converge(
                 best['sign'], out['phi']), short[:RELOCATE_KEEP],
                 self.task.workers):
