@@ -299,16 +299,15 @@ def _rescaled(st, cand, u, s0):
     return cand if np.all(np.isfinite(cand)) else None
 
 
-def _moved(st, phi, u, span, grid):
+def _moved(st, phi, u, s0, span, grid):
     """Copies of phi with one root unit of the monic polynomial in
     phi[lo:hi], span = (lo, hi), moved to each target of the grid =
     (reals, pairs), and with every two real roots moved together to each
-    pair of the grid (x's spread kept)."""
+    pair of the grid (x's spread s0 kept)."""
     (lo, hi), (reals, pairs) = span, grid
     units = _root_units(phi, span)
     if units is None:
         return []
-    s0 = l1_std(st, phi, u)
     single = [i for i, unit in enumerate(units) if unit.size == 1]
     moves = ([([i], _targets(unit, reals, pairs))
               for i, unit in enumerate(units)]
@@ -332,15 +331,15 @@ def _moved(st, phi, u, span, grid):
 CANCELLED = 0.05
 
 
-def _cancelled(st, phi, u, poles, zeros):
+def _cancelled(st, phi, u, s0, poles, zeros):
     """Copies of phi with each pole unit of L1 that a zero unit all but
     cancels (`CANCELLED`) moved, with that zero unit, to each target of
     the poles' grid: the same cancellation elsewhere, from where the pair
-    can part (x's spread kept). `poles` and `zeros` are their spans."""
+    can part (x's spread s0 kept). `poles` and `zeros` are their
+    spans."""
     pu, zu = _root_units(phi, poles), _root_units(phi, zeros)
     if pu is None or zu is None:
         return []
-    s0 = l1_std(st, phi, u)
     out = []
     for (i, p), (j, z) in itertools.product(enumerate(pu), enumerate(zu)):
         if p.size != z.size or np.max(np.abs(
@@ -382,9 +381,10 @@ def relocations(st, phi, u):
         The moved vectors (not yet checked for admissibility).
     """
     poles, zeros = (st.nc_free, st.im), (st.im + 4, st.im + 4 + st.o[1])
-    return (_moved(st, phi, u, poles, (POLES_REAL, POLES_PAIR))
-            + _moved(st, phi, u, zeros, (ZEROS_REAL, ZEROS_PAIR))
-            + _cancelled(st, phi, u, poles, zeros))
+    s0 = l1_std(st, phi, u)
+    return (_moved(st, phi, u, s0, poles, (POLES_REAL, POLES_PAIR))
+            + _moved(st, phi, u, s0, zeros, (ZEROS_REAL, ZEROS_PAIR))
+            + _cancelled(st, phi, u, s0, poles, zeros))
 
 
 def opened(st, phi, u, widths):

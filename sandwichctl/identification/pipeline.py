@@ -184,8 +184,9 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         splits of the linear fit screened), sp_iter (15), sp_starts (4),
         n_random (6), seed (0), refits (2: L2 re-fits per refined
         start), relocate (3: rounds of moving roots of L1 across the
-        disk, while a round lowers the cost), smooth (True: a path through smoothed backlashes), hops
-        (4: perturbed restarts from the best), screen_samples
+        disk, while a round lowers the cost), smooth (True: a path
+        through smoothed backlashes), hops (4: perturbed restarts from
+        the best), screen_samples
         (2000: the short screening runs use this many leading samples;
         the refinements use all of them); the
         algorithm page of the documentation explains them. Recursive
@@ -205,7 +206,8 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         ``integrators`` (where they went: ``{'L1': .., 'L2': ..}``) and
         ``held_out`` (the check that an open backlash predicts the end of
         each experiment, fitted without it, at least as well as the
-        linear model; see `IdentificationResult`). ``print(res)`` shows them at a glance.
+        linear model; see `IdentificationResult`). ``print(res)`` shows
+        them at a glance.
 
     Raises
     ------
