@@ -867,6 +867,20 @@ def test_a_drift_term_is_cancelled_before_the_design():
         ctrl = sw.servo_controller(P2)
         assert ctrl.ki == 0 and any('drift term' in n for n in ctrl.notes)
         assert ctrl.margins['pole_radius'] < 0.99
+    # a free pole pinned next to z = 1 with a zero beside it is the same
+    # drift term (random drive 41's baseline: 0.999999 and 0.9999986);
+    # left in, it took the PID's integral gain to 0.012
+    den4 = np.polymul(np.polymul([1, -(1 - 1e-6)], [1, -0.6]), [1, -0.3])
+    P4 = ct.tf(np.polymul([0.02, 0.01], [1, -(1 - 1.4e-6)]), den4, 1e-3)
+    left, at = sw.design._servo_linear.cancel_unit_pair(P4)
+    assert at == pytest.approx(1 - 1.4e-6, abs=1e-9)
+    assert np.all(np.abs(left.poles()) < 0.7)
+    ctrl = sw.servo_controller(P4)
+    assert any('pinned next to' in note for note in ctrl.notes)
+    assert ctrl.ki > 0.1 * sw.servo_controller(left).ki > 0
+    # without the zero beside it, the pinned pole stays
+    P5 = ct.tf([0.02, 0.01], den4, 1e-3)
+    assert sw.design._servo_linear.cancel_unit_pair(P5)[1] is None
     # three poles near 1 are no pair
     den3 = np.polymul(np.polymul([1, -1], [1, -0.99999]), [1, -0.99998])
     P3 = ct.tf(np.polymul([0.02, 0.01], [1, -1.00001]), den3, 1e-3)
