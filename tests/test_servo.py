@@ -990,6 +990,12 @@ def test_adapt_is_refused_where_there_is_nothing_to_adapt():
         sw.servo_controller(plant, adapt=True)
     with pytest.raises(ValueError, match="band_fraction > 0"):
         sw.servo_controller(result, adapt=True, band_fraction=0.0)
+    # a share given, but the identified backlash closed: the message says
+    # that it is the model's band that is missing, not the share
+    _, closed = _mismatched(0.0)
+    with pytest.raises(ValueError, match="backlash is closed"):
+        sw.servo_controller(closed, adapt=True, band_fraction=0.25)
+    assert not sw.servo_controller(closed).adapts
     # a share given by hand is kept unless adapt=True asks otherwise
     assert not sw.servo_controller(result, band_fraction=0.25).adapts
     assert sw.servo_controller(result, band_fraction=0.25, adapt=True).adapts

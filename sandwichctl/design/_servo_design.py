@@ -617,7 +617,11 @@ def band_adaptation(adapt, num, den, C, post, band_x, share, exact,
         raise ValueError(
             "adapt=True needs a band to adapt: a design from an "
             "identification result (a known model is inverted exactly) "
-            "with band_fraction > 0")
+            "with band_fraction > 0" + (
+                "" if exact or share <= 0 else
+                ", and a model whose backlash is open (this one's band "
+                "D1 + D2 is 0: the identified backlash is closed, so "
+                "there is nothing to compensate; leave adapt out)"))
     got = adaptation(num, den, C, ct.ss(*post, C.dt), band_x)
     if got is None:
         if adapt:
