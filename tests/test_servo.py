@@ -995,7 +995,10 @@ def test_adapt_is_refused_where_there_is_nothing_to_adapt():
     _, closed = _mismatched(0.0)
     with pytest.raises(ValueError, match="backlash is closed"):
         sw.servo_controller(closed, adapt=True, band_fraction=0.25)
-    assert not sw.servo_controller(closed).adapts
+    ctrl = sw.servo_controller(closed)
+    assert not ctrl.adapts
+    assert any(n.startswith('no backlash inverse: the identified backlash '
+                            'is closed') for n in ctrl.notes)
     # a share given by hand is kept unless adapt=True asks otherwise
     assert not sw.servo_controller(result, band_fraction=0.25).adapts
     assert sw.servo_controller(result, band_fraction=0.25, adapt=True).adapts

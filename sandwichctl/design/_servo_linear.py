@@ -259,6 +259,24 @@ def cancel_drift(model, notes):
     return model
 
 
+def band_note(share, band, integrating, asked, jump, lead):
+    """The design note on the backlash inverse: `share` of the model's
+    `band` (D1 + D2, in x), `asked` by the user or the default, its jump
+    spread over `jump` samples and started `lead` early."""
+    if not band > 0:
+        return ("no backlash inverse: the identified backlash is closed "
+                "(D1 + D2 = 0 in x), so there is no band to compensate")
+    return (f"backlash inverse on the reference: {share:.0%} of the "
+            f"model's band (D1 + D2 = {band:.4g} in x) "
+            + ("as asked" if asked else
+               "by default" + (" for an integrating L1" if integrating
+                               else "")
+               + ", since the play a loop sees is smaller than the gap (the "
+               "load coasts into it) and more over-compensated on the "
+               "benchmark drives")
+            + f"; jump spread over {jump} samples, started {lead} early")
+
+
 def ff_note(kind, preview, approx, linear_note, smooth, ratio):
     """The design note on the linear feedforward."""
     text = (f"feedforward: model inverse with {preview} samples of "

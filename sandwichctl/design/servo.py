@@ -422,7 +422,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         after it, and its baseline then has a crossover far too slow or
         the wrong sign; and when the baseline's low-frequency gain has the
         sign opposite to the sandwich's, or its fit stopped with a free
-        pole pinned at the stability boundary; the feedforward then
+        pole pinned at the stability boundary (with a zero beside it the
+        pair is a drift term, cancelled first); the feedforward then
         inverts the sandwich's too, unless `feedforward_from` is
         'baseline'; and when the baseline's feedback leaves the loop around
         :math:`\bar m L_1 L_2` unstable and, feedback alone, tracks the
@@ -718,15 +719,9 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                                   scal, notes)
         if not blends:
             other = zero
-        notes.append(
-            f"backlash inverse on the reference: {band_fraction_out:.0%} of "
-            f"the model's band (D1 + D2 = {co['D1'] + co['D2']:.4g} in x) "
-            + ("by default" + (" for an integrating L1" if integrating
-                                else "")
-               + ", since the play a loop sees is smaller than the gap (the "
-               "load coasts into it) and more over-compensated on the "
-               "benchmark drives" if band_fraction is None else "as asked")
-            + f"; jump spread over {jump} samples, started {lead} early")
+        notes.append(sl.band_note(band_fraction_out, co['D1'] + co['D2'],
+                                  integrating, band_fraction is not None,
+                                  jump, lead))
     if feedforward is not None:
         lin_ff = _ss(fn, fd, dt)
     band_fraction, smoothing = band_fraction_out, smoothing_out
