@@ -206,8 +206,7 @@ def cancel_unit_pair(sys):
     if num.size < 2 or den.size < 2:
         return sys, None
     poles, zeros = np.roots(den), np.roots(num)
-    unit = np.flatnonzero(at_one(poles) | ((np.abs(poles) > PINNED)
-                                           & (np.abs(poles) < 1)
+    unit = np.flatnonzero(at_one(poles) | (_pinned_mask(poles)
                                            & (np.abs(poles.imag) < AT_ONE)))
     near = np.flatnonzero(np.abs(zeros - 1) < UNIT_CANCEL)
     close = np.flatnonzero(np.abs(poles - 1) < UNIT_CANCEL)
@@ -225,9 +224,15 @@ def pinned(sys):
     z = 1 (within 5e-7: an integrator; a pinned pole is 1e-6 or more
     inside), when it is beyond `PINNED`, else None."""
     poles = np.roots(tf_arrays(sys)[1])
-    radii = np.abs(poles[np.abs(poles - 1) > 5e-7])
-    inside = radii[(radii > PINNED) & (radii < 1)]
+    inside = np.abs(poles[_pinned_mask(poles)])
     return float(inside.max()) if inside.size else None
+
+
+def _pinned_mask(poles):
+    """Which of the poles lie inside the unit circle beyond `PINNED`, not
+    at z = 1 (within 5e-7: an integrator): pinned at the boundary."""
+    radii = np.abs(poles)
+    return (np.abs(poles - 1) > 5e-7) & (radii > PINNED) & (radii < 1)
 
 
 def integrates(block):
