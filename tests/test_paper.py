@@ -304,9 +304,12 @@ def test_xy_stage_notebook_prose_matches_its_numbers():
         methods={'bundle': ('bundle', section6.PAPER_SETTINGS)})
     val = run['validation']['bundle']
     text = _markdown('xy_stage.ipynb')
-    assert _quoted(text, val['max_relative_error'])            # free run
-    assert _quoted(text, val['one_step_max_relative_error'])   # one step
+    # the nonsmooth recursion's numbers move with the machine's rounding
+    # (19.1 % and 2.6 % when written, 29.2 % and 3.0 % on another machine):
+    # the prose's claims are the sides of 11 % they fall on
+    assert val['one_step_max_relative_error'] < 0.11 < val[
+        'max_relative_error']
+    assert 'meets its 11 %' in text and 'does **not** reach 11 %' in text
     assert '34 %' not in text and '34%' not in text
     page = (ROOT / 'docs' / 'reproduction.md').read_text()
-    assert f"{val['max_relative_error']:.2%}" in page
-    assert f"{val['one_step_max_relative_error']:.2%}" in page
+    assert 'on the same sides of 11%' in ' '.join(page.split())
