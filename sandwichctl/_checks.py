@@ -308,7 +308,11 @@ def check_dt(name, dt):
             f"{name} must be a positive sampling time or True (discrete, "
             f"unspecified); got {type(dt).__name__} {dt!r}. sandwichctl's "
             f"systems are discrete-time")
-    if not (np.isfinite(dt) and dt > 0):
+    try:
+        finite = bool(np.isfinite(float(dt)))
+    except OverflowError:           # an int beyond the floats
+        finite = False
+    if not (finite and dt > 0):
         raise ValueError(
             f"{name} must be a positive sampling time (finite, > 0) or True "
             f"(discrete, unspecified); got {dt!r}")
@@ -364,12 +368,13 @@ def _real_array(name, values, what):
     return np.asarray(raw, dtype=float)
 
 
-def check_signal(name, values, length=None):
+def check_signal(name, values, length=None, of=None):
     """Return a finite 1-D float array, rejecting other shapes and NaN/inf.
 
     A row or column vector (shape (1, N) or (N, 1)) is accepted as the N
     samples it holds; other 2-D shapes, scalars, complex or boolean
-    arrays are refused.
+    arrays are refused. With `length`, it must have that many samples
+    (as the signal named `of`, when given: the message names both).
     """
     arr = _real_array(name, values, 'an array of numbers')
     if arr.ndim == 2 and 1 in arr.shape:
@@ -381,7 +386,9 @@ def check_signal(name, values, length=None):
         raise ValueError(f"{name} must contain at least one sample; got 0")
     if length is not None and arr.size != length:
         raise ValueError(
-            f"{name} must have {length} samples; got {arr.size}")
+            f"{name} must have {length} samples"
+            + ("" if of is None else f", as many as {of}")
+            + f"; got {arr.size}")
     bad = ~np.isfinite(arr)
     if bad.any():
         first = int(np.flatnonzero(bad)[0])

@@ -34,6 +34,7 @@ Y = PLANT.simulate(U).outputs
 UL = sw.examples.paper_input(400, seed=0)      # enough to identify from
 YL = PLANT.simulate(UL).outputs
 NF = sw.backlash_nonlinearity(BL)
+SERVO = sw.servo_controller(PLANT)
 C_PI = ct.tf([0.3, -0.2], [1, -1], 1)
 BIG = 10 ** 6
 ORD = dict(na=2, nb=0, nc=2, nd=1)
@@ -796,7 +797,7 @@ ROWS = [
     ('closed_loop_response-servo-overflow',
      lambda t: sw.closed_loop_response(_DtPlant(1), np.full(N, 1e308),
                                        sw.servo_controller(PLANT)),
-     OverflowError, 'not applied to the plant'),
+     VE, 'reference must be at most'),
     ('servo_reference-dt', lambda t: sw.servo_reference(0, 1.0), VE, 'dt'),
     ('servo_reference-travel',
      lambda t: sw.servo_reference(1e-3, np.nan), VE, 'travel'),
@@ -1247,6 +1248,46 @@ ROWS = [
     ('servo_controller-zero-at-one',
      lambda t: sw.servo_controller(ct.tf([1, -1], [1, -0.5, 0], 1)), VE,
      'zero at z = 1'),
+    # found by a fuzz of the public API (2026-11-29): a state of the wrong
+    # size went into the compiled step and corrupted memory
+    ('ServoController.dynamics-state-size',
+     lambda t: SERVO.dynamics(0, np.zeros(3), [0.5, 0.0]), VE,
+     'state must have'),
+    ('ServoController.output-input-size',
+     lambda t: SERVO.output(0, np.zeros(SERVO.nstates), [0.0]), VE,
+     'input vector must be'),
+    ('ServoController.reset-huge-y', lambda t: SERVO.reset(y=1e300), VE,
+     'y must be at most'),
+    ('servo_controller-huge-operating_point',
+     lambda t: sw.servo_controller(PLANT, operating_point=(1e300, 0.0)), VE,
+     'operating_point must be at most'),
+    ('closed_loop_response-huge-y',
+     lambda t: sw.closed_loop_response(_OddPlant(1e300), U, SERVO), VE,
+     'returned y'),
+    ('ServoController.run-lengths',
+     lambda t: SERVO.run(np.zeros(25), np.zeros(50)), VE,
+     'as many as r_ahead'),
+    ('identify-huge-int-dt',
+     lambda t: sw.identify(UL, YL, **PLANT.orders, dt=10 ** 400), VE, 'dt'),
+    ('Backlash-huge-int-dt',
+     lambda t: sw.Backlash(1, 1, 0.1, 0.1, dt=10 ** 400), VE, 'dt'),
+    ('identify-huge-warmup',
+     lambda t: sw.identify(UL, YL, **PLANT.orders, method='rpem',
+                           warmup=10 ** 30), VE, 'warmup'),
+    ('identify_linear-huge-max_iter',
+     lambda t: sw.identify_linear(UL, YL, nb=1, nf=2, nk=1,
+                                  max_iter=10 ** 400), VE, 'max_iter'),
+    ('refine-huge-max_iter',
+     lambda t: sw.refine(PLANT, UL, YL, max_iter=10 ** 400), VE, 'max_iter'),
+    ('family_specs-huge', lambda t: sw.data.family_specs(10 ** 9), VE,
+     'n_cases'),
+    ('parameter_error-complex',
+     lambda t: sw.parameter_error([1 + 1j, 1.0], [1.0, 1.0]), TE, 'real'),
+    ('parameter_error-bool',
+     lambda t: sw.parameter_error([True, False], [1.0, 1.0]), TE,
+     'theta_hat'),
+    ('parameter_error-none',
+     lambda t: sw.parameter_error(None, [1.0, 1.0]), TE, 'theta_hat'),
 ]
 
 

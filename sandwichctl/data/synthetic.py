@@ -68,6 +68,9 @@ SNRS = (np.inf, 100.0, 20.0, 5.0)
 
 #: Range of record lengths drawn by `random_case`.
 N_RANGE = (2000, 10000)
+#: The most cases of one family (`family_specs`): a list of specs, not a
+#: stream.
+MOST_CASES = 1_000_000
 
 #: Length buckets over which `random_family` spreads its cases.
 N_BUCKETS = ((2000, 3000), (3000, 5000), (5000, 7500), (7500, 10000))
@@ -531,7 +534,7 @@ def family_specs(n_cases, seed=0, n_range=None):
     >>> sorted({s['input_kind'] for s in specs})
     ['lowpass', 'multisine', 'square+sine', 'white']
     """
-    n_cases = check_int('n_cases', n_cases, minimum=1)
+    n_cases = check_int('n_cases', n_cases, 1, MOST_CASES)
     seed = check_int('seed', seed)
     lo, hi = _check_n_range(n_range)
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0x5a9d]))

@@ -208,8 +208,19 @@ def check_options(modulus_margin, feedforward, feedforward_from,
             np.ndim(operating_point) != 1 or np.size(operating_point) != 2:
         raise ValueError(f"operating_point must be a pair (u0, y0); got "
                          f"{operating_point!r}")
-    u0, y0 = (check_finite('operating_point', v) for v in operating_point)
+    u0, y0 = (check_level('operating_point', v) for v in operating_point)
     return mm, adapt, crossover_limit, max_preview, name, (u0, y0)
+
+
+def check_level(name, value):
+    """`value` as a finite float of at most `INPUT_MOST` in magnitude (an
+    operating point: the controller adds it to u and takes it from y,
+    whose steps refuse larger ones)."""
+    v = check_finite(name, value)
+    if not abs(v) <= INPUT_MOST:
+        raise ValueError(f"{name} must be at most {INPUT_MOST:g} in "
+                         f"magnitude, as the controller's inputs; got {v!r}")
+    return v
 
 
 def overflow(k):
@@ -243,16 +254,24 @@ def check_input_arrays(r_ahead, y):
 def finite_inputs(t, u):
     """(r_ahead, y) of python-control's input vector `u` at time t, as
     floats; not finite raises, as `ServoController.step` does."""
-    r, y = float(u[0]), float(u[1])
+    vec = np.asarray(u, dtype=float).ravel()
+    if vec.size != 2:
+        raise ValueError(f"the controller's input vector must be [r_ahead, "
+                         f"y], 2 entries; got {vec.size} at t={t!r}")
+    r, y = float(vec[0]), float(vec[1])
     check_inputs(r, y, f" at t={t!r}")
     return r, y
 
 
-def python_step(p, ix, t, x, u):
-    """(next state, output) of python-control's state x and input vector u
-    at time t (`ServoController`'s update and output functions); inputs,
-    state or output not finite raise."""
+def python_step(p, ix, n, t, x, u):
+    """(next state, output) of python-control's state x (n entries) and
+    input vector u at time t (`ServoController`'s update and output
+    functions); inputs, state or output not finite, or of another size,
+    raise."""
     s = np.array(x, dtype=float)
+    if s.shape != (n,):
+        raise ValueError(f"the controller's state must have {n} entries "
+                         f"(ctrl.nstates); got shape {s.shape} at t={t!r}")
     if not np.all(np.isfinite(s)):
         raise ValueError(f"the controller's state must be finite; got "
                          f"{np.count_nonzero(~np.isfinite(s))} entries that "

@@ -38,6 +38,7 @@ from .compensator import SandwichCompensator, _check_model
 from .tracking import TrackingController
 from .loop import servo_loop, plant_measure, plant_advance, ss_arrays
 from .servo import ServoController
+from ._servo_inputs import INPUT_MOST
 from ._servo_design import frequency_grid, loop_gain, tf_arrays
 from ..model._kernel import _ss_output, _ss_update
 from ..model.sandwich import SandwichSystem, _warn_divergence
@@ -160,8 +161,10 @@ def closed_loop_response(plant, reference, controller, compensator=None):
     Raises
     ------
     ValueError
-        If the sampling times disagree or the plant has no delay, or a
-        user's plant returns a y that is not finite.
+        If the sampling times disagree or the plant has no delay, or,
+        with a `ServoController`, the reference or a user's plant's y is
+        not finite or above 1e100 in magnitude (what ``ctrl.step``
+        refuses).
     OverflowError
         If a `ServoController`'s u overflows against a user's plant.
 
@@ -260,6 +263,10 @@ def _servo_response(plant, reference, ctrl, compensator):
             f"or StateSpace, or an object with a step(u) -> y method; got "
             f"{type(plant).__name__}")
     r = check_signal('reference', reference)
+    if not np.max(np.abs(r)) <= INPUT_MOST:
+        raise ValueError(
+            f"reference must be at most {INPUT_MOST:g} in magnitude, as "
+            f"ctrl.step's r_ahead; got {float(np.max(np.abs(r))):g}")
     if r.size <= ctrl.preview:
         raise ValueError(
             f"reference has {r.size} samples, and the controller reads it "

@@ -29,8 +29,8 @@ from ..model._coefficients import tf_to_ss
 from ..model._kernel import _ss_output, _ss_update
 from ..model.backlash import backlash_step
 from ..model.sandwich import SandwichSystem, _warn_divergence
-from .._checks import (check_signal, check_positive, check_nonnegative,
-                       check_real)
+from .._checks import (DATA_RANGE, check_signal, check_positive,
+                       check_nonnegative, check_real)
 
 __all__ = ['servo_metrics']
 
@@ -117,10 +117,12 @@ def servo_loop(plant, r, ctrl):
     yk = (_measured(_call(plant.read, 'read()', 0), 'read()', 0)
           if hasattr(plant, 'read') else 0.0)
     for k in range(n):
-        if not math.isfinite(yk):
+        if not abs(yk) <= DATA_RANGE[1]:
             raise ValueError(
                 f"the plant returned y = {yk!r} at sample {k} "
-                f"({'read' if k == 0 else 'step'}); the loop stops there")
+                f"({'read' if k == 0 else 'step'}): not finite or above "
+                f"{DATA_RANGE[1]:g} in magnitude, which ctrl.step refuses; "
+                f"the loop stops there")
         uk = servo_step(ctrl._p, ctrl._ix, ctrl._s, r_ahead[k], yk)
         if not math.isfinite(uk):
             raise OverflowError(
@@ -253,8 +255,8 @@ def servo_metrics(reference, y, u, dt, window=0.1, hold=0.3, deadband=0.0):
     (0.0, 0)
     """
     r = check_signal('reference', reference)
-    y = check_signal('y', y, r.size)
-    u = check_signal('u', u, r.size)
+    y = check_signal('y', y, r.size, of='reference')
+    u = check_signal('u', u, r.size, of='reference')
     dt = check_positive('dt', dt)
     deadband = check_nonnegative('deadband', deadband)
     window = check_nonnegative('window', window)

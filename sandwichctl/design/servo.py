@@ -90,14 +90,14 @@ from ._servo_guard import guard_scalars
 from ._servo_inputs import (MAX_PREVIEW, DESIGN_KEYS, check_options,
                             check_plant_tf, unwrap_model, warn_result,
                             python_step, check_inputs, check_input_arrays,
-                            overflow)
+                            overflow, check_level)
 from ._servo_kernel import (pack, servo_step_kept, servo_run, adapt_index,
                             rest_scalars, BAND, GUARD, INVERSE,
                             NSCALAR, IX_ADAPT, IX_BLEND, IX_GUARD, IX_SCALAR)
 from .loop import ss_arrays
 from ..model.sandwich import SandwichSystem
 from .._checks import (MAX_ORDER, PLAIN_REALS, IdentificationWarning,
-                       check_finite, check_int, check_nonnegative,
+                       check_int, check_nonnegative,
                        check_positive, check_real, check_signal)
 
 __all__ = ['ServoController', 'servo_controller']
@@ -225,9 +225,9 @@ class ServoController(ct.NonlinearIOSystem):
         """
         u0, y0 = self._design['operating_point']
         if y is not None:
-            y0 = check_finite('y', y)
+            y0 = check_level('y', y)
         if u is not None:
-            u0 = check_finite('u', u)
+            u0 = check_level('u', u)
         self._s[:] = 0.0
         sc = self._ix[IX_SCALAR]
         self._p[sc + NSCALAR - 2:sc + NSCALAR] = u0, y0
@@ -257,7 +257,7 @@ class ServoController(ct.NonlinearIOSystem):
         """`step` over given sequences from the current memory (open loop:
         y is recorded, not simulated); returns u."""
         r_ahead = check_signal('r_ahead', r_ahead)
-        y = check_signal('y', y, r_ahead.size)
+        y = check_signal('y', y, r_ahead.size, of='r_ahead')
         check_input_arrays(r_ahead, y)
         keep = self._s.copy()
         u = servo_run(self._p, self._ix, self._s, r_ahead, y)
@@ -296,10 +296,11 @@ class ServoController(ct.NonlinearIOSystem):
 
     # --- python-control system ----------------------------------------
     def _update(self, t, x, u, params=None):
-        return python_step(self._p, self._ix, t, x, u)[0]
+        return python_step(self._p, self._ix, self.nstates, t, x, u)[0]
 
     def _output(self, t, x, u, params=None):
-        return np.array([python_step(self._p, self._ix, t, x, u)[1]])
+        return np.array([python_step(self._p, self._ix, self.nstates, t,
+                                     x, u)[1]])
 
     def __setattr__(self, name, value):
         if self.__dict__.get('_built') and name in self._design:

@@ -325,7 +325,8 @@ class RPEMOptions(_RecursiveCommon):
         for name in ('P0', 'p_max', 'max_step', 'm_min', 'err_limit',
                      'divergence_limit'):
             self._set(name, check_positive(name, getattr(self, name)))
-        self._set('warmup', check_int('warmup', self.warmup))
+        self._set('warmup', check_int('warmup', self.warmup, 0,
+                                       MOST_SAMPLES))
 
 
 #: The option class of each method.

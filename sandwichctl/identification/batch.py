@@ -51,9 +51,9 @@ from ._lm import lm
 from ._problem import Problem, unit_poles
 from ._starts import admissible, perturb
 from ..model.sandwich import SandwichSystem
-from .._checks import (MOST_STARTS, check_bool, check_data_scale, check_int,
-                       check_positive, check_rng, check_tolerance,
-                       progress_bar, serial_blas)
+from .._checks import (MOST_ROUNDS, MOST_STARTS, check_bool,
+                       check_data_scale, check_int, check_positive, check_rng,
+                       check_tolerance, progress_bar, serial_blas)
 
 __all__ = ['refine']
 
@@ -119,7 +119,7 @@ def refine(model, u, y=None, max_iter=100, tol=1e-10, n_starts=1,
                         f"{type(model).__name__}")
     us, ys, _, offset_info, estimate = prepare(u, y, model.dt, offsets)
     check_data_scale('u', us), check_data_scale('y', ys)
-    max_iter = check_int('max_iter', max_iter, minimum=1)
+    max_iter = check_int('max_iter', max_iter, 1, MOST_ROUNDS)
     progress = check_bool('progress', progress)
     n_starts = check_int('n_starts', n_starts, 1, MOST_STARTS)
     tol = check_tolerance('tol', tol)

@@ -42,7 +42,7 @@ from ._linear import fit_oe_auto, fit_output, max_root, RADIUS
 from .result import INPUT_OFFSET, MIN_FIT, input_offset_text
 from .._checks import (check_int, check_positive, check_tolerance, check_dt,
                        serial_blas)
-from .._checks import check_data_scale
+from .._checks import MOST_ROUNDS, check_data_scale
 
 __all__ = ['identify_linear', 'LinearIdentificationResult']
 
@@ -254,7 +254,7 @@ def identify_linear(u, y=None, nb=None, nf=None, nk=1, dt=True,
     dt = check_dt('dt', dt)
     n = sum(part.size for part in us)
     nb, nf, nk, integrators = _check_orders(n, nb, nf, nk, integrators)
-    max_iter = check_int('max_iter', max_iter, minimum=1)
+    max_iter = check_int('max_iter', max_iter, 1, MOST_ROUNDS)
     tol = check_tolerance('tol', tol)
     if name is not None and not isinstance(name, str):
         raise TypeError(f"name must be a string or None; got "

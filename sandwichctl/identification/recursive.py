@@ -415,7 +415,10 @@ class RecursiveIdentifier:
         hist = (np.array(self._hist) if self._hist else np.zeros((0, p)))
         success = self.diverged_at is None and self.n_samples > 0
         resets = self.counts.get('reset', 0)
-        if self.n_samples == 0:
+        if self.diverged_at is not None:
+            message = (f"diverged at sample {self.diverged_at}; the model "
+                       f"is the last finite estimate")
+        elif self.n_samples == 0:
             message = "no samples processed yet: the model is theta0"
         elif success and resets > self.n_samples / 2:
             success = False         # the covariance never held: no learning
@@ -432,10 +435,6 @@ class RecursiveIdentifier:
                        f"(other units), or try another eta0 or theta0")
         elif success:
             message = f"processed {self.n_samples} samples"
-        else:
-            message = (f"diverged at sample "
-                       f"{self.diverged_at}; the model is the last finite "
-                       f"estimate")
         res = IdentificationResult(
             model=self.model, theta=self.theta, history=hist,
             errors=np.array(self._err), kinds=np.array(self._kind, int),

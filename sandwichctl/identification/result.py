@@ -14,8 +14,8 @@ import numpy as np
 from scipy import stats
 from scipy.optimize import OptimizeResult
 
-from .._checks import (check_reference, check_vector, warn, ExcitationWarning,
-                       IdentificationWarning)
+from .._checks import (_real_array, check_reference, check_vector, warn,
+                       ExcitationWarning, IdentificationWarning)
 from ..model._coefficients import signed_theta
 
 __all__ = ['IdentificationResult', 'parameter_error']
@@ -228,11 +228,9 @@ def parameter_error(theta_hat, theta_true):
     0.0447...
     """
     theta_true = check_reference('theta_true', theta_true)
-    try:
-        theta_hat = np.asarray(theta_hat, dtype=float)
-    except (TypeError, ValueError):
-        raise TypeError(f"theta_hat must be an array of numbers, shape (p,) "
-                        f"or (N, p); got {theta_hat!r:.60}") from None
+    theta_hat = np.asarray(_real_array(
+        'theta_hat', theta_hat, 'an array of numbers, shape (p,) or (N, p)'),
+        dtype=float)
     if theta_hat.ndim not in (1, 2):
         raise ValueError(f"theta_hat must have shape (p,) or (N, p); got "
                          f"shape {theta_hat.shape}")

@@ -162,7 +162,11 @@ def _check_dt(dt):
         raise ValueError("dt = 0 is a continuous-time record; sandwichctl "
                          "identifies discrete-time models from sampled "
                          "data: give the sampling time")
-    if not (np.isfinite(dt) and dt > 0):
+    try:
+        finite = bool(np.isfinite(float(dt)))
+    except OverflowError:           # an int beyond the floats
+        finite = False
+    if not (finite and dt > 0):
         raise ValueError(f"dt must be a finite sampling time > 0 or True; "
                          f"got {dt!r}")
     return float(dt)

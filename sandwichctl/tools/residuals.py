@@ -121,6 +121,9 @@ class ResidualResult:
                 f"autocorrelation and the cross-correlation panels); got "
                 f"{type(ax).__name__}")
         axes = np.asarray(ax, dtype=object)
+        if not all(hasattr(a, 'axhspan') for a in axes):
+            raise TypeError(f"ax must hold two matplotlib Axes; got "
+                            f"{[type(a).__name__ for a in axes]}")
         panels = [
             (axes[0], self.lags, self.autocorrelation, self.outside_auto,
              f"autocorrelation of the residuals of {self.name}", 'lag'),
