@@ -165,6 +165,15 @@ def check_nonnegative(name, value):
     return value
 
 
+def is_finite_real(value):
+    """Whether the real number `value` is finite as a float (an integer
+    beyond the floats is not; numpy's isfinite refuses one)."""
+    try:
+        return bool(np.isfinite(float(value)))
+    except OverflowError:
+        return False
+
+
 def check_finite(name, value):
     """Return `value` as float, requiring it to be finite."""
     value = _as_real_scalar(name, value)
@@ -308,11 +317,7 @@ def check_dt(name, dt):
             f"{name} must be a positive sampling time or True (discrete, "
             f"unspecified); got {type(dt).__name__} {dt!r}. sandwichctl's "
             f"systems are discrete-time")
-    try:
-        finite = bool(np.isfinite(float(dt)))
-    except OverflowError:           # an int beyond the floats
-        finite = False
-    if not (finite and dt > 0):
+    if not (is_finite_real(dt) and dt > 0):
         raise ValueError(
             f"{name} must be a positive sampling time (finite, > 0) or True "
             f"(discrete, unspecified); got {dt!r}")

@@ -427,7 +427,7 @@ def test_auto_integrators_never_below_the_integrator_free_linear_fit():
 def test_an_optimiser_stopped_at_max_iter_says_how_to_let_it_run_on():
     """A search cut short by max_iter fails with the remedy in its
     message, and following it gives a converged success."""
-    # SNR 20: what is left after 2 iterations a run is several times the
+    # SNR 20: what is left after 2 iterations of a run is several times the
     # share that counts as converged (`_lm.CONVERGED`); at SNR 100 it sits
     # near that share, on one side or the other by the machine's rounding
     case = sw.data.random_case(0, n=2000, snr=20)

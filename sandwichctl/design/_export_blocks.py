@@ -123,15 +123,16 @@ class Block:
         T, Z = schur(self.A.reshape(self.n, self.n), output='real')
         return self._similar(Z, Z.T)
 
-    def _balanced(self, solver='bilinear'):
+    def _balanced(self, solver=None):
         """The block balanced (square-root method, on the gramians of the
         block with B and C scaled to unit norm: balanced up to one common
         scale of the states), without the states whose Hankel singular
         values are below `TRUNCATE` of the largest (a near-cancelled pole
         and zero: their share of the output is far below a float's
-        precision); the gramians by scipy's `solver` ('direct' solves
-        n^2 unknowns: `DIRECT_MOST`); None where a pole is on or outside the unit circle,
-        or where the gramians cannot be factored."""
+        precision); the gramians by scipy's `solver` (by default 'direct'
+        up to `DIRECT_MOST` states, 'bilinear' above); None where a pole
+        is on or outside the unit circle, or where the gramians cannot be
+        factored."""
         A = self.A.reshape(self.n, self.n)
         if not np.max(np.abs(np.linalg.eigvals(A))) < STABLE:
             return None
@@ -141,8 +142,9 @@ class Block:
             for M, v in ((A, b), (A.T, c)):
                 with warnings.catch_warnings():
                     warnings.simplefilter('ignore', LinAlgWarning)
-                    W = solve_discrete_lyapunov(M, np.outer(v, v),
-                                                method=solver)
+                    W = solve_discrete_lyapunov(M, np.outer(v, v), method=(
+                        solver or ('direct' if self.n <= DIRECT_MOST
+                                   else 'bilinear')))
                 lam, vec = eigh(0.5 * (W + W.T))
                 factors.append(vec * np.sqrt(np.clip(lam, 0.0, None)))
             u, hsv, vt = svd(factors[1].T @ factors[0])

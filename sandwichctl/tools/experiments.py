@@ -23,7 +23,7 @@ import numbers
 import numpy as np
 import control as ct
 
-from .._checks import check_signal
+from .._checks import check_signal, is_finite_real
 
 __all__ = ['Experiments', 'as_experiments']
 
@@ -162,11 +162,7 @@ def _check_dt(dt):
         raise ValueError("dt = 0 is a continuous-time record; sandwichctl "
                          "identifies discrete-time models from sampled "
                          "data: give the sampling time")
-    try:
-        finite = bool(np.isfinite(float(dt)))
-    except OverflowError:           # an int beyond the floats
-        finite = False
-    if not (finite and dt > 0):
+    if not (is_finite_real(dt) and dt > 0):
         raise ValueError(f"dt must be a finite sampling time > 0 or True; "
                          f"got {dt!r}")
     return float(dt)
