@@ -42,6 +42,7 @@ closed loop's poles are then computed; an unstable or margin-violating
 loop is never returned.
 """
 
+import numba
 import numpy as np
 import control as ct
 
@@ -145,11 +146,34 @@ def _roots(a, b, level):
 
 def _outside(a, b, level):
     """Largest ki >= 0 up to which |a + ki b| >= level at every frequency
-    (rows designs, columns frequencies), grown from ki = 0 (inf where it
-    never binds), and whether ki = 0 meets it."""
-    r1, _, c = _roots(a, b, level)
-    lim = np.where(np.isfinite(r1) & (r1 > 0), r1, np.inf).min(axis=1)
-    return lim, np.all(c >= 0, axis=1)
+    (rows designs, columns frequencies; b a single row), grown from ki = 0
+    (inf where it never binds), and whether ki = 0 meets it."""
+    lim, ok = np.empty(a.shape[0]), np.empty(a.shape[0], bool)
+    _outside_rows(np.ascontiguousarray(a), np.ascontiguousarray(b[0]),
+                  float(level), lim, ok)
+    return lim, ok
+
+
+@numba.njit(cache=True)
+def _outside_rows(a, b, level, lim, ok):
+    """`_outside` in one pass over the rows of a, without the temporaries
+    of `_roots` (whose formulas it repeats; the limits agree to ~1e-12,
+    the root's cancellation where B^2 >> 4AC): most of the cost of a
+    design's PID grid (benchmarks/bench_servo_design.py)."""
+    level2 = level ** 2
+    for i in range(a.shape[0]):
+        best, meets = np.inf, True
+        for j in range(b.size):
+            A = abs(b[j]) ** 2
+            B = 2 * (a[i, j] * np.conj(b[j])).real
+            C = abs(a[i, j]) ** 2 - level2
+            meets = meets and C >= 0
+            disc = B ** 2 - 4 * A * C
+            if disc >= 0:
+                r1 = (-B - np.sqrt(disc)) / (2 * A) if A > 0 else np.nan
+                if np.isfinite(r1) and r1 > 0 and r1 < best:
+                    best = r1
+        lim[i], ok[i] = best, meets
 
 
 #: the bound on the complementary sensitivity, :math:`|T| \le` T_PEAK.
@@ -403,21 +427,22 @@ def design_pid(num, den, dt, modulus_margin, limit=None, measured=None,
         return (np.all(np.abs(a) >= 1.005 * modulus_margin, axis=1)
                 & np.all(np.abs(a[:, high] - 1) <= 1, axis=1))
 
-    def grid(pole, kp, kd):
-        """Candidates (kp, ki, kd, pole) on the grid kp x kd: the PIDs
-        with their largest ki, and the PDs (ki = 0) that meet both
-        constraints."""
+    def grid(pole, kp, kd, pd):
+        """Candidates (kp, ki, kd, pole) on the grid kp x kd: the PDs (ki
+        = 0) that meet both constraints if `pd`, else the PIDs with their
+        largest ki."""
         KP, KD = (g.ravel() for g in np.meshgrid(kp, kd))
         boost = KD * (1 - pole) * 2 / (1 + pole) <= DERIVATIVE_BOOST * KP
         KP, KD = KP[boost], KD[boost]
         a = one_plus(pole, KP, KD)
-        b = I[None, :] * P[None, :]
-        ki = _ki_max(a, b, 1.005 * modulus_margin, high)
+        if pd:
+            keep = meets(a)
+            return [(p_, 0.0, d, pole) for p_, d in zip(KP[keep], KD[keep])]
+        ki = _ki_max(a, I[None, :] * P[None, :], 1.005 * modulus_margin,
+                     high)
         keep = np.isfinite(ki) & (ki > 0)
-        pd = meets(a)
-        return ([(p_, k, d, pole) for p_, k, d in
-                 zip(KP[keep], ki[keep], KD[keep])],
-                [(p_, 0.0, d, pole) for p_, d in zip(KP[pd], KD[pd])])
+        return [(p_, k, d, pole) for p_, k, d in
+                zip(KP[keep], ki[keep], KD[keep])]
 
     def ridge(pole, kds, lo, step, n):
         """For each kd of kds, the largest kp of lo * step**j (j = 0..n)
@@ -451,13 +476,13 @@ def design_pid(num, den, dt, modulus_margin, limit=None, measured=None,
     # has no rest point and limit-cycles (the drive's own speed loop
     # integrates load torques away); it gets the PD with the largest kp,
     # any other plant the PID with the largest ki
-    which, score = (1, 0) if integrating else (0, 1)
+    score = 0 if integrating else 1
     kp_grid = k0 * np.logspace(-4, 1, 60)
     # the PD's kd grid is twice as fine (see REFINE_STARTS)
     kd_grid = k0 * np.r_[0.0, np.logspace(-4, 1, 41 if integrating
                                           else 21)]
     found = [c for pole in (0.0, 0.5, 0.8)
-             for c in grid(pole, kp_grid, kd_grid)[which]]
+             for c in grid(pole, kp_grid, kd_grid, integrating)]
     best = first(sorted(found, key=lambda c: -c[score]))
     if best is not None and integrating:
         # refine the PD around it on a grid REFINE times finer, so that
@@ -488,7 +513,7 @@ def design_pid(num, den, dt, modulus_margin, limit=None, measured=None,
             kds = (kd * (kd_grid[2] / kd_grid[1]) ** fine if kd > 0
                    else np.r_[0.0, kd_grid[1] * (kd_grid[2] / kd_grid[1])
                               ** (fine[REFINE:] - 1)])
-            refined = first(sorted(grid(pole, kps, kds)[1],
+            refined = first(sorted(grid(pole, kps, kds, True),
                                    key=lambda c: -c[0]))
             if refined is not None and refined[0] > best[0]:
                 best = refined
