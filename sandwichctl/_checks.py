@@ -267,6 +267,37 @@ def check_name(name, value):
     return value
 
 
+def named_copy(self, name=None, use_prefix_suffix=True):
+    """A copy of the system, with a new name.
+
+    python-control's ``copy``, its arguments checked first (a name that
+    is not a string failed inside python-control's name handling).
+
+    Parameters
+    ----------
+    name : str, optional
+        Name of the copy. By default the system's own name with
+        python-control's prefix and suffix (``'name$copy'``) if
+        `use_prefix_suffix`, else a generic ``'sys[<id>]'``.
+    use_prefix_suffix : bool, optional
+        See `name` (default True).
+
+    Returns
+    -------
+    object
+        The copy, of the system's own class.
+
+    Raises
+    ------
+    TypeError
+        If `name` is not a string or None, or `use_prefix_suffix` is not
+        True or False.
+    """
+    check_name('name', name)
+    check_bool('use_prefix_suffix', use_prefix_suffix)
+    return ct.InputOutputSystem.copy(self, name, use_prefix_suffix)
+
+
 def check_label(name, value, what='signal'):
     """The name of the single input, output or signal of a SISO system.
 
@@ -425,23 +456,39 @@ def check_reference(name, values):
     return arr
 
 
-def check_data_scale(name, parts):
-    """Data (one array or a list of experiments) an identifier can square.
+def check_model_output(yhat, what):
+    """Refuse a model's simulated or predicted output `yhat` (`what` names
+    it) that is not finite or is beyond the data the tools take (above
+    ``DATA_RANGE[1]`` in magnitude): the model is unstable."""
+    bad = ~(np.abs(yhat) <= DATA_RANGE[1])
+    if bad.any():
+        raise ValueError(
+            f"{what} is not finite or above {DATA_RANGE[1]:g} in magnitude "
+            f"(first bad sample {int(np.flatnonzero(bad)[0])}); the model "
+            f"is probably unstable, or its gain does not suit the data's "
+            f"units")
 
-    A signal whose peak magnitude is outside `DATA_RANGE` is refused with
-    the remedy (rescale it); an all-zero signal passes (other checks
-    speak about excitation).
+
+def check_data_scale(name, parts, sums='the least-squares costs', low=True,
+                     back='scale the model back'):
+    """Refuse data (one array or a list of experiments) whose `sums` of
+    squares would overflow or underflow double precision.
+
+    A signal whose peak magnitude is outside `DATA_RANGE` (with `low`
+    False, above it: a tiny signal passes) is refused with the remedy:
+    rescale it, and `back`; an all-zero signal passes (other checks speak
+    about excitation).
     """
     parts = parts if isinstance(parts, (list, tuple)) else [parts]
     peak = max(float(np.max(np.abs(part))) for part in parts)
     lo, hi = DATA_RANGE
-    if peak and not lo <= peak <= hi:
+    if peak and not (lo if low else 0) <= peak <= hi:
         what = 'overflow' if peak > hi else 'underflow'
+        where = f"outside {lo:g} .. {hi:g}" if low else f"above {hi:g}"
         raise ValueError(
-            f"{name} has peak magnitude {peak:.3g}, outside {lo:g} .. "
-            f"{hi:g}: the least-squares costs (sums of squares) would "
-            f"{what} double precision; rescale {name} (e.g. {name} / "
-            f"{peak:.0e}, other units) and scale the model back")
+            f"{name} has peak magnitude {peak:.3g}, {where}: {sums} (sums "
+            f"of squares) would {what} double precision; rescale {name} "
+            f"(e.g. {name} / {peak:.0e}, other units) and {back}")
 
 
 def check_parameter_count(orders, n_samples):
@@ -535,10 +582,9 @@ def check_discrete_siso_tf(name, sys):
     if np.iscomplexobj(raw_num) or np.iscomplexobj(raw_den):
         raise ValueError(f"{name} has complex coefficients; a sandwich "
                          f"block must be real")
+    check_finite_system(name, sys)
     num = np.trim_zeros(raw_num.astype(float), 'f')
     den = np.trim_zeros(raw_den.astype(float), 'f')
-    if not (np.all(np.isfinite(num)) and np.all(np.isfinite(den))):
-        raise ValueError(f"{name} has non-finite coefficients (NaN or inf)")
     if num.size == 0:
         raise ValueError(f"{name} has a zero numerator; a sandwich block "
                          f"must pass its input on")
@@ -551,6 +597,42 @@ def check_discrete_siso_tf(name, sys):
             f"denominator degree {den.size - 1}); a causal difference "
             f"equation needs deg(num) <= deg(den)")
     return num / den[0], den / den[0]
+
+
+def check_finite_system(name, sys):
+    """Refuse a linear python-control system with a NaN or inf coefficient
+    (a TransferFunction's numerator or denominator, a StateSpace's A, B,
+    C, D, an FRD's response); other systems pass unchanged."""
+    if isinstance(sys, ct.TransferFunction):
+        parts = [c for rows in (sys.num, sys.den) for row in rows
+                 for c in row]
+    elif isinstance(sys, ct.StateSpace):
+        parts = [sys.A, sys.B, sys.C, sys.D]
+    elif isinstance(sys, ct.FrequencyResponseData):
+        parts = [sys.fresp]
+    else:
+        return sys
+    if not all(np.all(np.isfinite(np.asarray(part))) for part in parts):
+        raise ValueError(f"{name} has non-finite coefficients (NaN or "
+                         f"inf); a system's coefficients must be finite "
+                         f"numbers")
+    return sys
+
+
+def check_gain(name, num, den, why):
+    """Refuse a transfer function num/den (1-D arrays) whose gain, the
+    largest numerator over the largest denominator coefficient, is
+    outside `DATA_RANGE`: `why` says what it would break, ``{what}`` in
+    it reading 'overflow' or 'underflow'."""
+    gain = np.max(np.abs(num)) / np.max(np.abs(den))
+    lo, hi = DATA_RANGE
+    if not lo <= gain <= hi:
+        what = 'overflow' if gain > hi else 'underflow'
+        raise ValueError(
+            f"{name} has a gain of order {gain:.1e} (largest numerator "
+            f"over largest denominator coefficient), outside {lo:g} .. "
+            f"{hi:g}: {why.format(what=what)}; rescale u or y (other "
+            f"units)")
 
 
 def common_dt(name1, dt1, name2, dt2):

@@ -13,8 +13,8 @@ from . import _servo_design as sd
 from ._servo_kernel import servo_step
 from ..model.sandwich import SandwichSystem
 from .._checks import (DATA_RANGE, MAX_ORDER, IdentificationWarning,
-                       check_finite, check_int, check_name, check_option,
-                       check_real, warn)
+                       check_finite, check_gain, check_int, check_name,
+                       check_option, check_real, warn)
 
 __all__ = []
 
@@ -131,15 +131,8 @@ def check_plant_tf(name, sys):
         raise ValueError(f"{name} must have at least one sample of delay "
                          f"(strictly proper); with none the loop is "
                          f"algebraic")
-    gain = np.max(np.abs(num)) / np.max(np.abs(den))
-    lo, hi = DATA_RANGE
-    if not lo <= gain <= hi:
-        what = 'overflow' if gain > hi else 'underflow'
-        raise ValueError(
-            f"{name} has a gain of order {gain:.1e} (largest numerator "
-            f"over largest denominator coefficient), outside {lo:g} .. "
-            f"{hi:g}: the design squares it, which would {what} double "
-            f"precision; rescale u or y (other units)")
+    check_gain(name, num, den, "the design squares it, which would {what} "
+               "double precision")
     zeros = np.roots(num) if num.size > 1 else np.zeros(0)
     if np.any(sd.at_one(zeros)):
         raise ValueError(

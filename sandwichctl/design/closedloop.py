@@ -43,7 +43,7 @@ from ._servo_design import frequency_grid, loop_gain, tf_arrays
 from ..model._kernel import _ss_output, _ss_update
 from ..model.sandwich import SandwichSystem, _warn_divergence
 from .._checks import (check_discrete_siso_tf, check_real, check_signal,
-                       common_dt, check_name, check_axes)
+                       common_dt, check_name, check_axes, named_copy)
 
 __all__ = ['closed_loop_system', 'ClosedLoopSystem', 'closed_loop_response',
            'plot_loop']
@@ -370,6 +370,8 @@ class ClosedLoopSystem(ct.InterconnectedSystem):
     made of, and its name, signal names and parameters are then set as
     they were. ``copy`` and ``deepcopy`` copy it as any other system.
     """
+
+    copy = named_copy            # its name checked
 
     def __reduce__(self):
         parts = getattr(self, '_parts', None)

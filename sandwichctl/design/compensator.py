@@ -27,7 +27,8 @@ from ..model._kernel import _ss_output, _ss_update
 from ..model.sandwich import (SandwichSystem, _settling_samples,
                               _warn_divergence)
 from .._checks import (check_positive, check_bool, check_name, check_label,
-                       check_signal, check_vector, check_timepts)
+                       check_signal, check_vector, check_timepts,
+                       named_copy)
 
 __all__ = ['SandwichCompensator', 'sandwich_compensator', 'linearized_plant']
 
@@ -140,6 +141,8 @@ class SandwichCompensator(ct.InterconnectedSystem):
             connections=[['L1_inverse.x_d', 'backlash_inverse.x_d']],
             inplist=['backlash_inverse.v_d'], outlist=['L1_inverse.u'],
             inputs=inputs, outputs=outputs, dt=model.dt, name=name)
+
+    copy = named_copy            # its name checked
 
     def __reduce__(self):
         # the python-control state-space block holds closures, which

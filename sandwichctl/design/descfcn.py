@@ -62,8 +62,8 @@ from .closedloop import TrackingController, closed_loop_response
 from .._checks import (DATA_RANGE, MOST_SAMPLES, check_finite,
                        check_nonnegative, check_positive, check_signal,
                        check_int, check_bool, check_name,
-                       check_discrete_siso_tf, common_dt, warn,
-                       SimulationWarning)
+                       check_discrete_siso_tf, check_finite_system,
+                       common_dt, warn, SimulationWarning, _real_array)
 
 __all__ = ['BacklashNonlinearity', 'backlash_nonlinearity',
            'backlash_harmonics', 'unit_circle_frd', 'limit_cycles',
@@ -317,14 +317,21 @@ def unit_circle_frd(sys, omega=None, name=None):
     sys : control.LTI
         Discrete-time SISO system (dt > 0 or True, meaning 1).
     omega : array_like, optional
-        Frequencies in rad per time unit, within (0, pi/dt]; default 2000
-        points from 1e-3 pi/dt to pi/dt.
+        At least two distinct frequencies in rad per time unit, within
+        (0, pi/dt], in any order (the result holds them sorted); default
+        2000 points from 1e-3 pi/dt to pi/dt.
     name : str, optional
         Name of the result.
 
     Returns
     -------
     control.FrequencyResponseData
+
+    Raises
+    ------
+    ValueError
+        If `sys` is not a discrete-time SISO system with finite
+        coefficients, or `omega` is not as above.
 
     Examples
     --------
@@ -342,21 +349,41 @@ def unit_circle_frd(sys, omega=None, name=None):
     if sys.ninputs != 1 or sys.noutputs != 1:
         raise ValueError(f"sys must be SISO; got {sys.noutputs} outputs and "
                          f"{sys.ninputs} inputs")
+    check_finite_system('sys', sys)
     name = check_name('name', name)
     dt = 1.0 if sys.dt is True else float(sys.dt)
     if omega is None:
         omega = np.linspace(1e-3, 1.0, 2000) * np.pi / dt
     else:
-        omega = check_signal('omega', omega)
-        if omega.size < 2:                  # the FRD interpolates (smooth)
-            raise ValueError(f"omega must hold at least 2 frequencies; got "
-                             f"{omega.size}")
-        if omega.min() <= 0 or omega.max() > np.pi / dt * (1 + 1e-12):
-            raise ValueError(f"omega must lie in (0, pi/dt] = (0, "
-                             f"{np.pi / dt:.6g}]; got [{omega.min():.6g}, "
-                             f"{omega.max():.6g}]")
+        omega = _check_omega(omega, np.pi / dt, 'pi/dt')
     resp = np.squeeze(sys(np.exp(1j * omega * dt)))
     return ct.frd(resp, omega, smooth=True, name=name)
+
+
+def _check_omega(omega, top=None, label=None):
+    """`omega` as sorted frequencies: at least 2 (the FRD interpolates
+    between them), distinct, > 0 and (unless `top` is None) at most
+    `top`, which `label` names."""
+    span = ("above 0" if top is None
+            else f"in (0, {label}] = (0, {top:.6g}]")
+    want = f"at least 2 distinct frequencies {span} (rad per time unit)"
+    arr = _real_array('omega', omega, 'an array of frequencies')
+    if arr.ndim == 0:
+        raise ValueError(f"omega must be an array of {want}; got the "
+                         f"single number {float(arr):g}")
+    omega = np.sort(check_signal('omega', arr))
+    if omega.size < 2:
+        raise ValueError(f"omega must hold {want}; got {omega.size}")
+    if omega[0] <= 0 or (top is not None
+                         and omega[-1] > top * (1 + 1e-12)):
+        raise ValueError(f"omega must lie {span}; got [{omega[0]:.6g}, "
+                         f"{omega[-1]:.6g}]")
+    same = np.flatnonzero(np.diff(omega) == 0)
+    if same.size:
+        value = omega[same[0]]
+        raise ValueError(f"omega must hold {want}; got {value:g} "
+                         f"{int(np.sum(omega == value))} times")
+    return omega
 
 
 def limit_cycles(H, F, A, omega=None, refine=True):
@@ -370,15 +397,19 @@ def limit_cycles(H, F, A, omega=None, refine=True):
     Parameters
     ----------
     H : control.LTI
-        Linear part of the loop (continuous or discrete).
+        Linear part of the loop (continuous or discrete), with finite
+        coefficients.
     F : ct.DescribingFunctionNonlinearity or callable
-        The nonlinearity, e.g. `backlash_nonlinearity`.
+        The nonlinearity, e.g. `backlash_nonlinearity`, or a static
+        function x -> F(x); not a python-control system (a linear one
+        belongs in H).
     A : array_like
         Amplitudes at which to evaluate the describing function. Those
         where it is 0 (inside a dead band, where -1/N(A) is infinite and
         no limit cycle can be) are left out of the scan.
     omega : array_like, optional
-        Frequencies (rad per time unit) for the Nyquist curve.
+        Frequencies (rad per time unit) for the Nyquist curve: at least
+        two distinct ones, > 0 (and at most pi/dt for a discrete H).
     refine : bool, optional
         Refine the intersections with ``scipy.optimize`` (default True).
 
@@ -388,15 +419,32 @@ def limit_cycles(H, F, A, omega=None, refine=True):
         ``.intersections`` is a list of (amplitude, frequency) pairs: the
         predicted limit cycles. ``.plot()`` draws the Nyquist curve and
         :math:`-1/N(A)` (``ct.describing_function_plot``).
+
+    Raises
+    ------
+    TypeError
+        If `H` is not a SISO LTI system, or `F` is neither a
+        describing-function nonlinearity nor a function (a python-control
+        system is refused: a linear one belongs in H).
+    ValueError
+        If `H` has NaN or inf coefficients, `A` holds an amplitude <= 0 or
+        only amplitudes where the describing function is 0, or `omega` is
+        not as above.
     """
     if not isinstance(H, ct.LTI) or H.ninputs != 1 or H.noutputs != 1:
         raise TypeError(f"H must be a SISO python-control LTI system (e.g. "
                         f"a ct.TransferFunction); got {type(H).__name__}")
-    if not (isinstance(F, ct.DescribingFunctionNonlinearity)
+    check_finite_system('H', H)
+    if isinstance(F, ct.InputOutputSystem) or not (
+            isinstance(F, ct.DescribingFunctionNonlinearity)
             or callable(F)):
+        kind = type(F).__name__
         raise TypeError(f"F must be a describing-function nonlinearity "
                         f"(e.g. sw.backlash_nonlinearity(...)) or a "
-                        f"function; got {type(F).__name__}")
+                        f"function x -> F(x); got {kind}"
+                        + (", a python-control system: a linear block "
+                           "belongs in H (the loop is x = -H[F(x)])"
+                           if isinstance(F, ct.InputOutputSystem) else ""))
     A = check_signal('A', A)
     if np.any(A <= 0):
         raise ValueError(f"A must hold amplitudes > 0; got {A.min():g}")
@@ -417,6 +465,8 @@ def limit_cycles(H, F, A, omega=None, refine=True):
     if H.isdtime(strict=True):
         H = unit_circle_frd(H, omega, name=H.name)
         omega = H.omega
+    elif omega is not None:
+        omega = _check_omega(omega)
     resp = _df_response(H, F, A, omega, refine)
     if refine and any(not A.min() <= a <= A.max()
                       for a, _ in resp.intersections):

@@ -79,7 +79,7 @@ from ..model.sandwich import SandwichSystem
 from .._checks import (check_discrete_siso_tf, check_nonnegative,
                        check_positive, check_signal, common_dt, check_dt,
                        check_finite, check_bool, check_name, check_label,
-                       check_labels, warn_overflow)
+                       check_labels, named_copy, warn_overflow)
 
 __all__ = ['BacklashInverse', 'backlash_inverse', 'backlash_inverse_response',
            'causal_inverse']
@@ -280,6 +280,8 @@ class BacklashInverse(ct.NonlinearIOSystem):
         update, output = _inverse_functions(*self._values)
         super().__init__(update, output, inputs=inputs, outputs=outputs,
                          states=states, dt=dt, name=name)
+
+    copy = named_copy            # its name checked
 
     def __reduce__(self):
         # rebuild from plain data, as Backlash does (robust to changes in

@@ -97,7 +97,7 @@ from ._servo_kernel import (pack, servo_step_kept, servo_run, adapt_index,
 from .loop import ss_arrays
 from ..model.sandwich import SandwichSystem
 from .._checks import (MAX_ORDER, PLAIN_REALS, IdentificationWarning,
-                       check_int, check_nonnegative,
+                       check_int, check_nonnegative, named_copy,
                        check_positive, check_real, check_signal)
 
 __all__ = ['ServoController', 'servo_controller']
@@ -308,6 +308,8 @@ class ServoController(ct.NonlinearIOSystem):
                                  f"compiled controller would not see it): "
                                  f"design again with sw.servo_controller")
         super().__setattr__(name, value)
+
+    copy = named_copy            # its name checked
 
     def __reduce__(self):
         return (_rebuild, (self._design, self.name, self._s.copy(),

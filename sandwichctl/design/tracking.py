@@ -16,7 +16,7 @@ from ._servo_design import (at_one, frequency_grid, loop_radius, design_pid,
                             phase_crossings, pid_tf)
 from .loop import phase_margin
 from .._checks import (check_discrete_siso_tf, common_dt, check_bool,
-                       check_finite)
+                       check_finite, check_gain)
 
 __all__ = ['TrackingController', 'tracking_controller']
 
@@ -196,9 +196,10 @@ def tracking_controller(sys, feedforward=True, modulus_margin=0.6,
     Raises
     ------
     ValueError
-        If P is unstable, has zero DC gain, has more than
-        `TRACKING_MOST_POLES` poles, or no PI gains on the grid meet the
-        margin.
+        If P is unstable, has zero DC gain, has a gain (largest numerator
+        over largest denominator coefficient) outside 1e-100 .. 1e100
+        (rescale u or y), has more than `TRACKING_MOST_POLES` poles, or no
+        PI gains on the grid meet the margin.
 
     Examples
     --------
@@ -221,6 +222,8 @@ def tracking_controller(sys, feedforward=True, modulus_margin=0.6,
             f"{TRACKING_MOST_POLES} poles (its grid search computes the "
             f"closed-loop poles of thousands of PI gains); got "
             f"{den.size - 1}. sw.servo_controller designs for such a plant")
+    check_gain('sys', num, den, "the design's margins square it, which "
+               "would {what} double precision")
     poles = np.roots(den) if den.size > 1 else np.zeros(0)
     one = at_one(poles)
     if one.sum() == 1 and np.all(np.abs(poles[~one]) < 1):

@@ -77,7 +77,8 @@ class OEOptions(_Options):
     minimum_phase : {None, 'L1'}
         'L1' keeps L1's zeros inside the unit circle (`MINIMUM_PHASE`).
     widths : sequence of float
-        Relative backlash widths the nested starts open to (step 4).
+        Relative backlash widths the nested starts open to (step 4): at
+        least one, each in (0, 10).
     max_splits : int
         Most pole/zero splits of the linear fit screened (step 4).
     sp_iter, sp_starts, n_random, seed : int
@@ -156,11 +157,12 @@ class OEOptions(_Options):
                      ('zero', 'estimate'))
         self._set('minimum_phase', check_minimum_phase(self.minimum_phase))
         widths = self.widths
-        if np.ndim(widths) != 1 or not all(
+        if np.ndim(widths) != 1 or not len(widths) or not all(
                 isinstance(w, numbers.Real) and not isinstance(
                     w, (bool, np.bool_)) and 0 < w < 10 for w in widths):
-            raise ValueError(f"widths must be a sequence of relative widths "
-                             f"in (0, 10); got {widths!r}")
+            raise ValueError(f"widths must be a non-empty sequence of "
+                             f"relative widths in (0, 10) (the backlash "
+                             f"widths the starts open to); got {widths!r}")
         self._set('widths', tuple(float(w) for w in widths))
         for name, minimum in self._MINIMA.items():
             self._set(name, check_int(name, getattr(self, name), minimum,

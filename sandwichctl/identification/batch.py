@@ -88,7 +88,10 @@ def refine(model, u, y=None, max_iter=100, tol=1e-10, n_starts=1,
     seed : int or numpy.random.Generator, optional
         Seed of the perturbations.
     m_min : float, optional
-        Lower bound on the slopes m1, m2, relative to the scaled data.
+        Lower bound on the slopes m1, m2 that keeps them positive, in
+        (0, 1) (default 1e-9). It applies to the slopes on the scaled
+        data (u and y divided by their standard deviations, see the module
+        notes), not to those in the data's units.
     progress : bool, optional
         Show a progress bar over the starts.
     offsets : {'none', 'mean', 'estimate'}, optional
@@ -125,6 +128,13 @@ def refine(model, u, y=None, max_iter=100, tol=1e-10, n_starts=1,
     tol = check_tolerance('tol', tol)
     spread = check_positive('spread', spread)
     m_min = check_positive('m_min', m_min)
+    if not m_min < 1:
+        raise ValueError(
+            f"m_min must be in (0, 1); got {m_min!r}. It keeps the slopes "
+            f"positive on the scaled data (u and y divided by their "
+            f"standard deviations), not in the data's units; a bound of 1 "
+            f"or more there would override the data rather than guard "
+            f"the slopes")
     norm = model.normalized()
     co = norm.coefficients
     prob = Problem(us, ys, norm.orders, i1=unit_poles(co['a']),

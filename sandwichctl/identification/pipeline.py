@@ -178,7 +178,7 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         The method's options (each method's defaults and checks are one
         frozen dataclass in ``_options``; an option or argument that does
         not apply to the method raises). ``'oe'``: widths (relative
-        backlash widths the starts open to,
+        backlash widths the starts open to, at least one, each in (0, 10);
         default (0.05, 0.25)), screen_iter (8), keep (3), max_iter (200),
         tol (1e-8), min_fit (5, percent), max_splits (16: most pole/zero
         splits of the linear fit screened), sp_iter (15), sp_starts (4),

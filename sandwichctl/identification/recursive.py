@@ -39,7 +39,7 @@ from .result import IdentificationResult, judge, verdict
 from ..model.sandwich import SandwichSystem, theta_labels
 from .._checks import (warn, IdentificationWarning, check_dt, check_order,
                        check_bool, check_data_scale, check_signal,
-                       check_vector, check_finite)
+                       check_vector, check_finite, check_nonnegative)
 
 __all__ = ['RecursiveIdentifier']
 
@@ -410,7 +410,27 @@ class RecursiveIdentifier:
         learning (not most of them covariance resets or null steps), and
         the estimate is finite with both blocks stable; it cannot
         compare the model with a linear baseline, as ``sw.identify(...,
-        method=...)`` does on a whole record."""
+        method=...)`` does on a whole record.
+
+        Parameters
+        ----------
+        elapsed : float or None, optional
+            Seconds the identification took, stored as the result's
+            ``elapsed`` (default None: not measured).
+
+        Returns
+        -------
+        IdentificationResult
+
+        Raises
+        ------
+        TypeError
+            If `elapsed` is neither None nor a real number.
+        ValueError
+            If `elapsed` is negative, NaN or infinite.
+        """
+        if elapsed is not None:
+            elapsed = check_nonnegative('elapsed', elapsed)
         p = self._theta.size
         hist = (np.array(self._hist) if self._hist else np.zeros((0, p)))
         success = self.diverged_at is None and self.n_samples > 0

@@ -43,7 +43,8 @@ import control as ct
 
 from .._checks import (check_positive, check_nonnegative, check_signal,
                        check_finite, check_bool, check_dt, check_name,
-                       check_label, check_labels, warn_overflow)
+                       check_label, check_labels, named_copy,
+                       warn_overflow)
 
 __all__ = ['Backlash', 'backlash_response', 'INCREASE', 'MEMORY', 'DECREASE']
 
@@ -214,6 +215,8 @@ class Backlash(ct.NonlinearIOSystem):
         update, output = _backlash_functions(*self._values)
         super().__init__(update, output, inputs=inputs, outputs=outputs,
                          states=states, dt=dt, name=name)
+
+    copy = named_copy            # its name checked
 
     def __reduce__(self):
         # The update and output functions are closures, which pickle

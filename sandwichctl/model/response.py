@@ -5,8 +5,8 @@ depends on the step's height."""
 import numpy as np
 import control as ct
 
-from .._checks import (check_finite, check_timepts, check_vector,
-                       MOST_SAMPLES)
+from .._checks import (check_finite, check_finite_system, check_timepts,
+                       check_vector, MOST_SAMPLES)
 
 __all__ = ['step_response']
 
@@ -45,8 +45,9 @@ def step_response(sys, timepts=None, amplitude=1.0, initial_state=None):
     TypeError
         If `sys` is not a single-input python-control system.
     ValueError
-        If `amplitude` is not finite, the time points are not spaced by
-        dt, or no time points are given for a system whose settling time
+        If `sys` is a linear system with NaN or inf coefficients,
+        `amplitude` is not finite, the time points are not spaced by dt,
+        or no time points are given for a system whose settling time
         cannot be told.
 
     Examples
@@ -69,6 +70,7 @@ def step_response(sys, timepts=None, amplitude=1.0, initial_state=None):
     if not sys.isdtime(strict=True):
         raise ValueError(f"sys must be discrete-time; got dt={sys.dt!r}. "
                          f"For a continuous system use ct.step_response")
+    check_finite_system('sys', sys)
     amplitude = check_finite('amplitude', amplitude)
     step = 1.0 if sys.dt is True else float(sys.dt)
     if timepts is None:

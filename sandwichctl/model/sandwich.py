@@ -38,7 +38,7 @@ from ._coefficients import (declare_orders, difference_coefficients,
 from .._checks import (check_discrete_siso_tf, check_order, check_signal,
                        check_vector, common_dt, check_name, check_label,
                        check_bool, check_dt, check_option, check_timepts,
-                       warn, SimulationWarning)
+                       named_copy, warn, SimulationWarning)
 
 __all__ = ['SandwichSystem', 'theta_labels']
 
@@ -153,6 +153,8 @@ class SandwichSystem(ct.InterconnectedSystem):
             connections=[['backlash.x', 'L1.x'], ['L2.v', 'backlash.v']],
             inplist=['L1.u'], outlist=['L2.y'], inputs=inputs,
             outputs=outputs, dt=dt, name=name)
+
+    copy = named_copy            # its name checked
 
     def __reduce__(self):
         # python-control's state-space blocks hold closures, which pickle

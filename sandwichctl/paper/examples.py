@@ -12,7 +12,8 @@ import control as ct
 
 from ..model.sandwich import SandwichSystem
 from .._checks import (check_int, check_positive, check_nonnegative,
-                       check_finite, check_rng, check_signal)
+                       check_finite, check_rng, check_signal,
+                       check_data_scale)
 
 __all__ = ['paper_plant', 'paper_input', 'add_noise', 'SNR_KINDS',
            'PAPER_THETA0']
@@ -118,7 +119,9 @@ def add_noise(y, snr, seed=None, kind='variance'):
     ------
     ValueError
         If `snr` is not a finite number > 0, `kind` is not one of the
-        three readings, or y is constant.
+        three readings, y is constant, or y's peak magnitude is outside
+        1e-100 .. 1e100 (its variance would overflow or underflow: rescale
+        it).
 
     Examples
     --------
@@ -135,6 +138,8 @@ def add_noise(y, snr, seed=None, kind='variance'):
     46.5
     """
     y = check_signal('y', y)
+    check_data_scale('y', y, "y's variance", back='scale the noisy output '
+                     'back')
     snr = check_positive('snr', snr)
     if kind not in SNR_KINDS:
         raise ValueError(f"kind must be one of {sorted(SNR_KINDS)}; got "

@@ -38,7 +38,7 @@ import control as ct
 
 from ..model.sandwich import SandwichSystem
 from .experiments import as_experiments
-from .._checks import check_bool, check_int
+from .._checks import check_bool, check_int, check_model_output
 
 __all__ = ['residuals', 'ResidualResult']
 
@@ -174,11 +174,7 @@ def _simulate(model, u, dt):
         with np.errstate(over='ignore', invalid='ignore'):
             yhat = ct.forced_response(model, t, u).outputs
     yhat = np.asarray(yhat, dtype=float).reshape(-1)
-    if not np.all(np.isfinite(yhat)):
-        first = int(np.flatnonzero(~np.isfinite(yhat))[0])
-        raise ValueError(f"the simulated output of model {name!r} is not "
-                         f"finite (first bad sample {first}); the model is "
-                         f"probably unstable")
+    check_model_output(yhat, f"the simulated output of model {name!r}")
     return yhat
 
 
@@ -261,8 +257,8 @@ def residuals(model, data, lags=25, ax=None, plot=True):
     ValueError
         If `lags` is out of range, the data are not finite, the model is
         not SISO, is continuous-time, has another sampling time than the
-        data, or its simulation is not finite (unstable), or the
-        residuals or the input are constant.
+        data, or its simulation is not finite or above 1e100 in magnitude
+        (unstable), or the residuals or the input are constant.
 
     See Also
     --------

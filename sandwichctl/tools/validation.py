@@ -34,7 +34,8 @@ import control as ct
 
 from ..model.sandwich import SandwichSystem
 from .experiments import as_experiments
-from .._checks import (check_signal, check_int, check_axes, check_bool,
+from .._checks import (DATA_RANGE, check_signal, check_int, check_axes,
+                       check_bool, check_data_scale, check_model_output,
                        SimulationWarning)
 
 __all__ = ['fit_percent', 'nrmse', 'max_relative_error', 'compare',
@@ -63,8 +64,9 @@ def nrmse(y, yhat):
     Raises
     ------
     ValueError
-        If the signals have different lengths or non-finite samples, or if
-        y is constant (the normalisation is then zero).
+        If the signals have different lengths or non-finite samples, or
+        samples above 1e100 in magnitude (whose squares overflow: rescale
+        both alike), or if y is constant (the normalisation is then zero).
 
     See Also
     --------
@@ -77,10 +79,13 @@ def nrmse(y, yhat):
     0.7071
     """
     y, yhat = _check_pair(y, yhat)
-    # far from 1, both norms are scaled by y's peak, so that y of 1e200 or
-    # 1e-200 neither overflows nor underflows (the ratio is the same)
+    for name, other, values in (('y', 'yhat', y), ('yhat', 'y', yhat)):
+        check_data_scale(name, values, 'the error norms', low=False,
+                         back=f"{other} alike (the fit does not change)")
+    # the norms of a tiny y are scaled by its peak, so that y of 1e-200
+    # does not underflow (the ratio is the same)
     peak = float(np.max(np.abs(y)))
-    scale = peak if not 1e-100 <= peak <= 1e100 and peak > 0 else 1.0
+    scale = peak if 0 < peak < DATA_RANGE[0] else 1.0
     spread = np.linalg.norm((y - y.mean()) / scale)
     if spread == 0:
         raise ValueError(
@@ -113,8 +118,9 @@ def fit_percent(y, yhat):
     Raises
     ------
     ValueError
-        If the signals have different lengths or non-finite samples, or if
-        y is constant.
+        If the signals have different lengths or non-finite samples, or
+        samples above 1e100 in magnitude (rescale both alike), or if y is
+        constant.
 
     See Also
     --------
@@ -393,8 +399,10 @@ def compare(model, u, y=None, ax=None, initial_state=None, timepts=None,
     Raises
     ------
     ValueError
-        If u and y differ in length or contain NaN/inf, if y is constant,
-        if a model is not SISO or its output is not finite (unstable), or
+        If u and y differ in length or contain NaN/inf or samples above
+        1e100 in magnitude (rescale them, and the model to match), if y is
+        constant, if a model is not SISO or its output is not finite or
+        above 1e100 in magnitude (unstable), or
         if `horizon` is given with `initial_state` or a continuous-time
         model.
     TypeError
@@ -454,6 +462,9 @@ def compare(model, u, y=None, ax=None, initial_state=None, timepts=None,
     if u.size != y.size:
         raise ValueError(f"u and y must have the same number of samples; "
                          f"got {u.size} and {y.size}")
+    for name, values in (('u', u), ('y', y)):
+        check_data_scale(name, values, "the fit's error norms", low=False,
+                         back='the model to match')
     if labels is None:
         labels = [getattr(m, 'name', None) or f"model {i}"
                   for i, m in enumerate(models)]
@@ -546,11 +557,7 @@ def _simulate(sys, u, initial_state, timepts):
         else:
             resp = ct.forced_response(sys, t, u, initial_state=x0)
     yhat = np.asarray(resp.outputs, dtype=float).reshape(-1)
-    if not np.all(np.isfinite(yhat)):
-        raise ValueError(
-            f"the simulated output of model {sys.name!r} is not finite "
-            f"(first bad sample {int(np.flatnonzero(~np.isfinite(yhat))[0])}"
-            f"); the model is probably unstable")
+    check_model_output(yhat, f"the simulated output of model {sys.name!r}")
     return yhat, t
 
 
@@ -621,12 +628,8 @@ def _predict(sys, u, y, horizon, timepts):
     t = _default_timepts(sys, u.size) if timepts is None else timepts
     c, f = _recursion(sys, u)
     yhat = _k_step(c, f, y, horizon)
-    if not np.all(np.isfinite(yhat)):
-        raise ValueError(
-            f"the {horizon}-step prediction of model {sys.name!r} is not "
-            f"finite (first bad sample "
-            f"{int(np.flatnonzero(~np.isfinite(yhat))[0])}); the model is "
-            f"probably unstable")
+    check_model_output(yhat, f"the {horizon}-step prediction of model "
+                        f"{sys.name!r}")
     return yhat, t
 
 
