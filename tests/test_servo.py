@@ -747,6 +747,40 @@ def test_an_integrating_l1_gets_its_band_jump_spread_over_the_loop():
     assert du[0] < 0.5 * du[1]
 
 
+def test_a_long_lead_is_read_from_the_reference_line_not_a_block():
+    """The band jump's lead delays the linear feedforward by as many
+    samples. As zeros of its denominator that delay made a block of as
+    many states, whose dense update cost their square a sample (266
+    states, 74 us a step); the feedforward now reads r_ahead that late
+    from the reference delay line, and steps as the delayed block did."""
+    import types
+    from sandwichctl.design.loop import ss_arrays
+    from sandwichctl.design.servo import ServoController
+    from sandwichctl.design._servo_kernel import IX
+    plant = sw.SandwichSystem.from_coefficients(
+        a=[-1.0], b=[0.05], c=[-0.8], d=[0.2], m1=1.0, m2=1.0, D1=0.2,
+        D2=0.2, dt=1e-3)
+    result = types.SimpleNamespace(model=plant, success=True, fit=95.0,
+                                   linear=dict(model=plant.L1 * plant.L2,
+                                               fit=90.0))
+    ctrl = sw.servo_controller(result, jump_samples=120)
+    at = dict(zip(IX, ctrl._ix))
+    assert at['d_lin'] >= 60 and at['n_lin'] < 10
+    A, B, C, D = ctrl._design['_linear']
+    block = ct.ss(A, B.reshape(-1, 1), C.reshape(1, -1), D.reshape(1, 1),
+                  ctrl.dt)
+    delayed = ss_arrays(ct.tf(block) * ct.tf(
+        [1.0], np.r_[1.0, np.zeros(at['d_lin'])], ctrl.dt))
+    inside = ServoController(dict(ctrl._design, _linear=delayed,
+                                  _delays=(0, 0)))
+    assert dict(zip(IX, inside._ix))['n_lin'] >= at['d_lin']
+    rng = np.random.default_rng(0)
+    r, y = np.cumsum(rng.normal(size=(2, 600)), axis=1)
+    u = [[c.step(rk, yk) for rk, yk in zip(r, y)] for c in (ctrl, inside)]
+    np.testing.assert_allclose(u[0], u[1], rtol=0, atol=1e-9 * np.max(
+        np.abs(u[1])))
+
+
 def test_a_bad_reading_raises_and_leaves_the_memory_as_it_was():
     ctrl = sw.servo_controller(AXIS)
     for k in range(20):

@@ -6,9 +6,10 @@ feedback (`_servo_kernel._guard`), operation for operation."""
 from ._servo_kernel import EARLY, MOTION_TURNS, TURNS
 
 
-def blend_body(w, ps, lin, oth):
+def blend_body(w, ps, lin, oth, r_lin, r_oth):
     """The step's lines for the band's gain g and the blend b towards the
-    other feedforward, estimated together (`_servo_kernel._blend`)."""
+    other feedforward, estimated together (`_servo_kernel._blend`); r_lin
+    and r_oth are the C expressions of the two feedforwards' inputs."""
     T, n = w.T, w.name
     one, zero = w.num(1.0), w.num(0.0)
     ps2 = (f"{n}_block({n}_ps_A, {n}_ps_B, {n}_ps_C, {n}_ps_D,\n"
@@ -17,8 +18,8 @@ def blend_body(w, ps, lin, oth):
         "    {                /* the band's gain and the blend, online */",
         f"        {T} u_lin, d, e, phi_g, phi_b, g, b, pgg, pbb, pbg;",
         f"        {T} hb, hg, den, kb, kg;",
-        f"        u_lin = {lin.call(w, 'ra')};",
-        f"        d = {oth.call(w, 'ra')} - u_lin;",
+        f"        u_lin = {lin.call(w, r_lin)};",
+        f"        d = {oth.call(w, r_oth)} - u_lin;",
         '        e = r_now - yd;',
         f"        phi_g = {ps.call(w, 'u_ff')};",
         f"        phi_b = {ps2};",

@@ -6,12 +6,16 @@ The layout is written by `pack` and read by `_servo_step`:
 
 ``ix``: [preview, lead, n_fb, n_pre, n_post, compensate,
          off_fb, off_pre, off_post, off_scalar, n_lin, off_lin,
-         n_ps, off_ps, adapt, n_other, off_other, blend, off_guard]
+         n_ps, off_ps, adapt, n_other, off_other, blend, off_guard,
+         d_lin, d_other]
 
 - the feedback block C (e -> u_fb), the linear feedforward (r_ahead ->
   u_lin), the pre-inverse block (r_ahead -> w, the backlash output
   wanted) and the post-inverse block (x -> u_post) are state-space
-  blocks, each packed as A (n x n), B (n), C (n), D (1);
+  blocks, each packed as A (n x n), B (n), C (n), D (1); the linear
+  feedforward and the other one read r_ahead d_lin and d_other samples
+  late, from the reference delay line (a delay inside a block would be
+  as many states, and its dense A their square in operations a sample);
 - the process sensitivity block PS = P / (1 + C P) of the design plant
   (u_post -> phi, the regressor of the band's gain) is packed the same way;
 - the scalars are [m1, m2, D1, D2, width, mbar, rate, alpha, lam, p0,
@@ -55,7 +59,8 @@ NSCALAR = len(SCALARS)
 #: names of the entries of ix, in order (the layout above)
 IX = ('preview', 'lead', 'n_fb', 'n_pre', 'n_post', 'compensate', 'off_fb',
       'off_pre', 'off_post', 'off_scalar', 'n_lin', 'off_lin', 'n_ps',
-      'off_ps', 'adapt', 'n_other', 'off_other', 'blend', 'off_guard')
+      'off_ps', 'adapt', 'n_other', 'off_other', 'blend', 'off_guard',
+      'd_lin', 'd_other')
 #: the entries of ix that Python reads or turns off after `pack`
 IX_SCALAR, IX_ADAPT, IX_BLEND, IX_GUARD = (
     IX.index(name) for name in ('off_scalar', 'adapt', 'blend', 'off_guard'))
@@ -97,9 +102,14 @@ def rest_scalars(u0, y0):
 
 
 def pack(feedback, pre, post, linear, sensitivity, other, scalars, preview,
-         lead, compensate, adapt, blend):
+         lead, compensate, adapt, blend, delays=(0, 0)):
     """Lay out the blocks (each an (A, B, C, D) tuple of arrays) and the
-    scalars in (p, ix); return them and the state size."""
+    scalars in (p, ix); return them and the state size. `delays`: the
+    samples (at most `preview`) by which the linear and the other
+    feedforward read r_ahead late."""
+    if not all(0 <= d <= preview for d in delays):
+        raise ValueError(f"delays {delays} must lie in [0, preview = "
+                         f"{preview}]")
     parts, offsets = [], []
     pos = 0
     for A, B, C, D in (feedback, pre, post, linear, sensitivity, other):
@@ -120,7 +130,8 @@ def pack(feedback, pre, post, linear, sensitivity, other, scalars, preview,
     ix = np.array([preview, lead] + sizes + [int(bool(compensate))]
                   + offsets[:3] + [pos, n_lin, offsets[3], n_ps, offsets[4],
                                    int(bool(adapt)), n_other, offsets[5],
-                                   int(bool(blend)), guard], dtype=np.int64)
+                                   int(bool(blend)), guard, *delays],
+                  dtype=np.int64)
     return p, ix, guard + NGUARD
 
 
@@ -162,6 +173,18 @@ def _shift(s, s0, n, value):
 
 
 @numba.njit(cache=True)
+def _late(s, d, preview, ra, r_now):
+    """r_ahead d samples ago (0 <= d <= preview), from the reference
+    delay line s[:preview] just shifted (s[j] is r_ahead j samples ago)
+    or, at d = preview, the sample that fell out of it (r_now)."""
+    if d == 0:
+        return ra
+    if d == preview:
+        return r_now
+    return s[d]
+
+
+@numba.njit(cache=True)
 def servo_step(p, ix, s, r_ahead, y):
     """One sample of the servo controller; returns u(k), updates s."""
     preview, lead = ix[0], ix[1]
@@ -199,12 +222,14 @@ def servo_step(p, ix, s, r_ahead, y):
         s[i_bl + 2] += step
         x += s[i_bl + 2]
     u_ff = _block(p, ix[8], n_post, s, i_bl + 3, x)
-    u_lin = _block(p, ix[11], ix[10], s, i_bl + 3 + n_post, ra)
+    u_lin = _block(p, ix[11], ix[10], s, i_bl + 3 + n_post,
+                   _late(s, ix[19], preview, ra, r_now))
     i_ps = i_bl + 3 + n_post + ix[10]
     if ix[17]:
         # the band's gain and the blend towards the other feedforward
         i_o = i_ps + ix[12] + 2
-        d = _block(p, ix[16], ix[15], s, i_o, ra) - u_lin
+        d = _block(p, ix[16], ix[15], s, i_o,
+                   _late(s, ix[20], preview, ra, r_now)) - u_lin
         g, b = _blend(p, ix, s, i_ps, i_o + ix[15], u_ff, d, r_now - yd)
         u_ff *= g
         u_ff += u_lin

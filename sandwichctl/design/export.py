@@ -408,6 +408,12 @@ def _servo_parts(ctrl, w):
             w, sc['m1'], sc['m2'], sc['D1'], sc['D2'], sc['width']))
 
     r_now = (f"{n}_shift(s->r_line, {preview}, ra)" if preview else 'ra')
+
+    def late(d):
+        """r_ahead d samples ago (`_servo_kernel._late`)."""
+        return ('ra' if d == 0 else 'r_now' if d == preview
+                else f"s->r_line[{d}]")
+    r_lin, r_oth = late(at['d_lin']), late(at['d_other'])
     w_now = f"{n}_shift(s->w_line, {lead}, w_ahead)" if lead else 'w_ahead'
     body = [f"    const {T} ra = r_ahead - s->y0;",
             f"    const {T} yd = y - s->y0;",
@@ -438,7 +444,7 @@ def _servo_parts(ctrl, w):
                  '    }']
     body += [f"    u_ff = {post.call(w, 'x')};"]
     if blends:
-        body += blend_body(w, ps, lin, oth)
+        body += blend_body(w, ps, lin, oth, r_lin, r_oth)
     elif adapts:
         one, zero = w.num(1.0), w.num(0.0)
         body += ["    {                       /* the band's gain, online */",
@@ -460,7 +466,7 @@ def _servo_parts(ctrl, w):
                  '        u_ff *= g;',
                  '    }']
     if not blends:
-        body += [f"    u_ff += {lin.call(w, 'ra')};"]
+        body += [f"    u_ff += {lin.call(w, r_lin)};"]
     body += ['    return s->u0 + u_fb + u_ff;']
     signature = f"{T} {n}_step({n}_state *s, {T} r_ahead, {T} y)"
     reset = [f"    s->u0 = {n}_u0;", f"    s->y0 = {n}_y0;"]

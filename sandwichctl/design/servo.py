@@ -199,7 +199,8 @@ class ServoController(ct.NonlinearIOSystem):
                              design['_other'], design['_scalars'],
                              design['preview'], design['_lead'],
                              design['compensates'], design['adapts'],
-                             design['blends'])
+                             design['blends'],
+                             design.get('_delays', (0, 0)))
         self._p, self._ix = p, ix
         self._s = np.zeros(nstate)
         self._keep = np.zeros(nstate)       # the memory before a step
@@ -611,6 +612,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                "feedforward=None turns it off") + ": leave them out")
     pre = post = ps = other = zero
     lead, jump, band_fraction_out, smoothing_out = 0, 0, 0.0, 0.0
+    delays = [0, 0]     # samples r_ahead waits for the lin and other blocks
     adapts, other_inv, blends, smooth, ratio = False, None, False, 0, None
     scal = rest_scalars(u0, y0)
     if feedforward is None:
@@ -702,8 +704,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                     0 if other_inv is None else other_inv[2])
         pre = _ss(n2, d2, dt)
         post = _ss(n1, np.r_[d1, np.zeros(total - offset_preview)], dt)
-        fd = np.r_[fd, np.zeros(total - preview)]
-        preview = total
+        delays[0], preview = total - preview, total
         # the exact inverse keeps both slopes; the band offset alone (the
         # linear feedforward carries the mean slope) uses the mean one
         slopes = (co['m1'], co['m2']) if exact else (mbar, mbar)
@@ -717,11 +718,12 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
             ps, adapts = got, True
             if other_inv is not None:
                 on, od, op = other_inv
-                other = _ss(on, np.r_[od, np.zeros(total - op)], dt)
-                blends = sd.blend(ps, other, _ss(fn, fd, dt), model, dt,
-                                  scal, notes)
-        if not blends:
-            other = zero
+                blends = sd.blend(
+                    ps, _ss(on, np.r_[od, np.zeros(total - op)], dt),
+                    _ss(fn, np.r_[fd, np.zeros(delays[0])], dt), model, dt,
+                    scal, notes)
+                if blends:
+                    other, delays[1] = _ss(on, od, dt), total - op
         notes.append(sl.band_note(band_fraction_out, co['D1'] + co['D2'],
                                   integrating, band_fraction is not None,
                                   jump, lead))
@@ -737,7 +739,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                            if scal[GUARD][0] else None),
                   blends=bool(blends), _other=other,
                   notes=notes, _pre=pre, _post=post,
-                  _linear=lin_ff,
+                  _linear=lin_ff, _delays=tuple(map(int, delays)),
                   _lead=int(lead), _scalars=np.array(scal, float))
     if failed:
         notes.append("designed from an identification result that is not "
