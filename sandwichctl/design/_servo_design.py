@@ -161,16 +161,18 @@ def _outside_rows(a, b, level, lim, ok):
     the root's cancellation where B^2 >> 4AC): most of the cost of a
     design's PID grid (benchmarks/bench_servo_design.py)."""
     level2 = level ** 2
+    A = np.abs(b) ** 2                  # of the columns, the same each row
+    bc = np.conj(b)
     for i in range(a.shape[0]):
         best, meets = np.inf, True
         for j in range(b.size):
-            A = abs(b[j]) ** 2
-            B = 2 * (a[i, j] * np.conj(b[j])).real
+            B = 2 * (a[i, j] * bc[j]).real
             C = abs(a[i, j]) ** 2 - level2
             meets = meets and C >= 0
-            disc = B ** 2 - 4 * A * C
+            disc = B ** 2 - 4 * A[j] * C
             if disc >= 0:
-                r1 = (-B - np.sqrt(disc)) / (2 * A) if A > 0 else np.nan
+                r1 = ((-B - np.sqrt(disc)) / (2 * A[j]) if A[j] > 0
+                      else np.nan)
                 if np.isfinite(r1) and r1 > 0 and r1 < best:
                     best = r1
         lim[i], ok[i] = best, meets
