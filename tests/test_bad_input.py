@@ -1373,6 +1373,23 @@ ROWS = [
     ('ServoController.copy-use_prefix_suffix',
      lambda t: SERVO.copy(use_prefix_suffix='no'), TE,
      'use_prefix_suffix must be True or False'),
+    ('ServoController.step-masked',
+     lambda t: SERVO.step(np.ma.masked, 0.0), VE,
+     r'r_ahead is masked \(np.ma.masked\)'),
+    ('ServoController.reset-masked',
+     lambda t: SERVO.reset(y=np.ma.masked), VE, 'y is masked'),
+    ('data.ServoDrive.apply-masked',
+     lambda t: sw.data.ServoDrive(n=5).apply(np.ma.masked), VE,
+     'u is masked'),
+    ('RecursiveIdentifier.update-masked',
+     lambda t: sw.RecursiveIdentifier(**ORD).update(0.5, np.ma.masked), VE,
+     'y_k is masked'),
+    ('closed_loop_response-servo-plant-returns-masked',
+     lambda t: sw.closed_loop_response(_OddPlant(np.ma.masked), U,
+                                       sw.servo_controller(PLANT)), VE,
+     'y is masked'),
+    ('Backlash-masked', lambda t: sw.Backlash(np.ma.masked, 1, 0, 0), VE,
+     'm1 is masked'),
 ]
 
 
