@@ -1390,6 +1390,9 @@ ROWS = [
      'y is masked'),
     ('Backlash-masked', lambda t: sw.Backlash(np.ma.masked, 1, 0, 0), VE,
      'm1 is masked'),
+    ('RecursiveIdentifier.update-huge',
+     lambda t: sw.RecursiveIdentifier(**ORD).update(1e101, 0.0), VE,
+     r'u_k has peak magnitude 1e\+101, above 1e\+100.*rescale u_k'),
 ]
 
 

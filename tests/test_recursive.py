@@ -410,3 +410,21 @@ def test_a_bundle_estimate_of_null_steps_is_not_a_success():
     fine = sw.RecursiveIdentifier(**plant.orders)
     fine.update_many(u, y)
     assert fine.result().success
+
+
+def test_update_takes_a_tiny_sample_as_it_takes_zero():
+    """update(0.5, 1e-150) was refused as data that underflow ('rescale y
+    (e.g. y / 1e-150)') while update(0.5, 0.0) ran: one sample tells no
+    scale. It runs now, as update_many runs it inside a block; a sample
+    above 1e100 is still refused, by its own name."""
+    plant, u, y = _paper_data(200, seed=3)
+    one = sw.RecursiveIdentifier(**plant.orders)
+    block = sw.RecursiveIdentifier(**plant.orders)
+    y = y.copy()
+    y[50] = 1e-150
+    errors = [one.update(uk, yk) for uk, yk in zip(u, y)]
+    np.testing.assert_array_equal(errors, block.update_many(u, y))
+    np.testing.assert_array_equal(one.theta, block.theta)
+    with pytest.raises(ValueError, match='u_k has peak magnitude 1e'):
+        one.update(1e200, 0.0)
+    assert one.n_samples == 200

@@ -275,7 +275,11 @@ class RecursiveIdentifier:
         """
         u_k = check_finite('u_k', u_k)
         y_k = check_finite('y_k', y_k)
-        return float(self.update_many(np.array([u_k]), np.array([y_k]))[0])
+        # one sample tells no scale: only a value that overflows is refused
+        # (the record's lower bound refused 1e-150 but took 0)
+        check_data_scale('u_k', u_k, low=False)
+        check_data_scale('y_k', y_k, low=False)
+        return float(self._process(np.array([u_k]), np.array([y_k]))[0])
 
     def update_many(self, u, y):
         """Process a block of samples; return their prediction errors."""
@@ -283,6 +287,10 @@ class RecursiveIdentifier:
         y = check_signal('y', y, length=u.size)
         check_data_scale('u', u)
         check_data_scale('y', y)
+        return self._process(u, y)
+
+    def _process(self, u, y):
+        """`update_many` on checked samples."""
         if self.diverged_at is not None:
             raise RuntimeError(
                 f"the estimate diverged at sample {self.diverged_at}; "
