@@ -74,6 +74,24 @@ def _circular():
     return d
 
 
+def _nested(depth):
+    """Metadata of `depth` dicts, one inside the other."""
+    value = {}
+    for _ in range(depth):
+        value = {'a': value}
+    return value
+
+
+def _read_only_file():
+    """A text file object that cannot be written to."""
+    return io.TextIOWrapper(io.BufferedReader(io.BytesIO(b'')))
+
+
+def _closed(file):
+    file.close()
+    return file
+
+
 def _Result(**fields):
     """An object that passes for an identification result of PLANT."""
     import types
@@ -1390,6 +1408,19 @@ ROWS = [
      'y is masked'),
     ('Backlash-masked', lambda t: sw.Backlash(np.ma.masked, 1, 0, 0), VE,
      'm1 is masked'),
+    ('save_model-metadata-deep',
+     lambda t: sw.save_model(PLANT, t / 'm.json', metadata=_nested(2000)),
+     VE, 'metadata is nested more than 100 levels deep'),
+    ('save_model-path-null', lambda t: sw.save_model(PLANT, 'a\0b.json'), VE,
+     'path holds a null byte'),
+    ('load_model-path-null', lambda t: sw.load_model(t / 'a\0b.json'), VE,
+     'path holds a null byte'),
+    ('save_model-read-only-file',
+     lambda t: sw.save_model(PLANT, _read_only_file()),
+     io.UnsupportedOperation, 'cannot write the model file.*not writable'),
+    ('load_model-closed-file',
+     lambda t: sw.load_model(_closed(io.StringIO(_model_json()))), VE,
+     'path is a closed file'),
     ('RecursiveIdentifier.update-huge',
      lambda t: sw.RecursiveIdentifier(**ORD).update(1e101, 0.0), VE,
      r'u_k has peak magnitude 1e\+101, above 1e\+100.*rescale u_k'),

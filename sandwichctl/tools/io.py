@@ -82,6 +82,9 @@ from .._checks import MAX_ORDER, check_bool
 #: Largest file `load_model` reads: a model is a few hundred bytes, plus
 #: its metadata.
 _MAX_BYTES = 16 * 2 ** 20
+#: Deepest nesting of metadata save_model writes: json reads back less
+#: than Python's recursion limit (a file of 990 levels was not loaded)
+_MOST_DEPTH = 100
 
 __all__ = ['save_model', 'load_model', 'FORMAT_VERSION']
 
@@ -120,7 +123,9 @@ def save_model(model, path, metadata=None):
         of JSON-serialisable values with string keys.
     ValueError
         If `metadata` contains NaN or infinity (not valid JSON), itself,
-        or an int too large for a float.
+        or an int too large for a float, or nests more than 100 levels
+        deep (load_model would not read it back); or if `path` holds a
+        null byte or is a closed file.
 
     See Also
     --------
@@ -164,6 +169,8 @@ def save_model(model, path, metadata=None):
             raise TypeError(f"path must be a file name or a file opened "
                             f"in text mode ('w'); {_describe(path)} takes "
                             f"bytes") from None
+        except OSError as exc:                  # one opened for reading
+            raise _file_error(exc, _describe(path), 'write') from None
         return
     try:
         with open(os.fspath(path), 'w', encoding='utf-8') as f:
@@ -425,8 +432,15 @@ def _check_path(path, mode):
         raise TypeError(f"path must be a file name (str or os.PathLike) or "
                         f"an open text file; got {type(path).__name__} "
                         f"{_short(path)}")
-    if isinstance(path, (str, os.PathLike)) and not os.fspath(path):
+    name = os.fspath(path) if isinstance(path, (str, os.PathLike)) else None
+    if name == '':
         raise ValueError("path is empty; pass the name of a .json file")
+    if isinstance(name, str) and '\0' in name:
+        raise ValueError(f"path holds a null byte, which no file name "
+                         f"can; got {_short(name)}")
+    if getattr(path, 'closed', False) is True:
+        raise ValueError(f"path is a closed file, {_describe(path)}; "
+                         f"open it again")
 
 
 def _file_error(exc, where, action):
@@ -478,6 +492,10 @@ def _check_metadata(value, where, seen):
         if id(value) in seen:
             raise ValueError(f"{where} holds itself (a circular reference); "
                              f"JSON cannot store it")
+        if len(seen) == _MOST_DEPTH:           # seen: the enclosing ones
+            raise ValueError(f"metadata is nested more than {_MOST_DEPTH} "
+                             f"levels deep, which load_model could not "
+                             f"read back; flatten it")
         seen = seen | {id(value)}
         items = (value.items() if isinstance(value, dict)
                  else enumerate(value))
