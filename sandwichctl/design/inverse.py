@@ -74,7 +74,7 @@ import numba
 import numpy as np
 import control as ct
 
-from ..model.backlash import Backlash, backlash_step, finite_input
+from ..model.backlash import Backlash, backlash_step, finite_step
 from ..model.sandwich import SandwichSystem
 from .._checks import (check_discrete_siso_tf, check_nonnegative,
                        check_positive, check_signal, common_dt, check_dt,
@@ -204,13 +204,12 @@ def _inverse_functions(m1, m2, D1, D2, smoothing):
     interconnection into one dict, so two inverses held there would share
     one set)."""
     def update(t, state, inp, params):
-        return np.array(_inverse_step(finite_input(t, inp[0]), state[0],
-                                      state[1], m1, m2, D1, D2, smoothing))
+        return np.array(_inverse_step(*finite_step(t, inp, state), m1, m2,
+                                      D1, D2, smoothing))
 
     def output(t, state, inp, params):
-        return np.array(_inverse_step(finite_input(t, inp[0]), state[0],
-                                      state[1], m1, m2, D1, D2,
-                                      smoothing)[:1])
+        return np.array(_inverse_step(*finite_step(t, inp, state), m1, m2,
+                                      D1, D2, smoothing)[:1])
     return update, output
 
 

@@ -125,26 +125,31 @@ def backlash_response(x, m1, m2, D1, D2, x_prev=0.0, v_prev=0.0,
 def _backlash_functions(m1, m2, D1, D2):
     """Update and output functions of one backlash (parameters fixed)."""
     def update(t, state, inp, params):
-        x = finite_input(t, inp[0])
-        v, _ = backlash_step(x, state[0], state[1], m1, m2, D1, D2)
+        x, x_prev, v_prev = finite_step(t, inp, state)
+        v, _ = backlash_step(x, x_prev, v_prev, m1, m2, D1, D2)
         return np.array([x, v])
 
     def output(t, state, inp, params):
-        v, _ = backlash_step(finite_input(t, inp[0]), state[0], state[1],
-                             m1, m2, D1, D2)
+        v, _ = backlash_step(*finite_step(t, inp, state), m1, m2, D1, D2)
         return np.array([v])
     return update, output
 
 
-def finite_input(t, value):
-    """A block's input through python-control (at time t), as a float;
-    not finite raises (a NaN would stick in the backlash's memory, or
-    make python-control report an algebraic loop)."""
-    x = float(value)
+def finite_step(t, inp, state):
+    """(x, x_prev, v_prev): a backlash block's input and memory through
+    python-control (at time t), as floats; one not finite raises (a NaN
+    would stick in the memory, or make python-control report an algebraic
+    loop)."""
+    x = float(inp[0])
     if not math.isfinite(x):
         raise ValueError(f"an input of the backlash is not finite ({x!r}); "
                          f"its memory cannot hold it")
-    return x
+    x_prev, v_prev = float(state[0]), float(state[1])
+    if not (math.isfinite(x_prev) and math.isfinite(v_prev)):
+        raise ValueError(f"the memory of a backlash block (x_prev, v_prev) "
+                         f"is not finite at t={t!r}: ({x_prev!r}, "
+                         f"{v_prev!r}); give a finite initial state (X0)")
+    return x, x_prev, v_prev
 
 
 class Backlash(ct.NonlinearIOSystem):
