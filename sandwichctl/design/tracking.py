@@ -32,7 +32,8 @@ class TrackingController:
     ``v(k) = C(z)[r - y](k) + F(z)[r](k + preview)``: a PI feedback C and,
     optionally, a model-inverse feedforward F that uses the reference
     `preview` samples ahead (a planned trajectory). Built by
-    `tracking_controller` or `TrackingController.from_feedback`.
+    `tracking_controller` or `TrackingController.from_feedback`; its
+    attributes are read-only (each was computed with the others).
 
     Parameters
     ----------
@@ -87,6 +88,15 @@ class TrackingController:
             self.pole_radius = float(np.max(np.abs(
                 ct.feedback(loop, 1).poles())))
             self.margins = _margins(loop, self.pole_radius < 1)
+        self._built = True
+
+    def __setattr__(self, name, value):
+        if self.__dict__.get('_built') and name in self.__dict__:
+            raise AttributeError(
+                f"TrackingController.{name} is read-only (the other "
+                f"attributes were computed with it): build another with "
+                f"sw.tracking_controller or TrackingController.from_feedback")
+        super().__setattr__(name, value)
 
     @classmethod
     def from_feedback(cls, C, design_plant=None):
