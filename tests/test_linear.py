@@ -402,3 +402,27 @@ def test_a_fit_below_identifys_bar_is_not_a_success():
         table = sw.select_structure((u, rng.standard_normal(600)),
                                     orders=[(1, 0, 1, 0)])
     assert not any(row['success'] for row in table.rows)
+
+
+def test_a_crawl_stops_at_the_datas_precision(monkeypatch):
+    """On a speed drive's record (an integrator) the fit crawls along a
+    curved valley: it ran out of 100 iterations (and of 1,000) at fits
+    equal to four decimals. It now stops once its last steps are worth a
+    small share of one standard error, and says so; the cost is then
+    within that share of where 1,000 iterations of the crawl get."""
+    import sandwichctl as sw
+    from sandwichctl.identification import _linear
+    d = sw.data.random_drive(2)
+    n = int(round(5.0 / d['dt']))
+    u = sw.data.drive_reference(n, d['loop'], rng=102, dt=d['dt'])
+    y = sw.data.servo_drive(u, d['loop'], d['play'], d['dt'], seed=1102,
+                            **d['params'])
+    kw = dict(nb=3, nf=4, nk=1, dt=d['dt'], integrators=1)
+    res = identify_linear(u, y, **kw)
+    assert res.success and res.nit < 100
+    assert "converged to the data's precision" in res.message
+    monkeypatch.setattr(_linear, 'PRECISION', 0.0)
+    crawl = identify_linear(u, y, **kw, max_iter=1000)
+    assert not crawl.success and 'max_iter' in crawl.message
+    share = 7 / n
+    assert crawl.cost <= res.cost <= crawl.cost * (1 + share)
