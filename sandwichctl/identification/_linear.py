@@ -339,6 +339,20 @@ def fit_oe(u, y, shape, integrators, *, max_iter=100, tol=1e-10,
     return problem.result(problem.run(max_iter, tol, start, stop))
 
 
+def _precise(recent, predicted, share):
+    """The message of a run converged to the data's precision
+    (`PRECISION`), or None: `recent` the last steps' relative decreases,
+    `predicted` the Gauss-Newton step's, `share` p / N."""
+    if len(recent) == PRECISION_WINDOW and predicted <= share \
+            and sum(recent) <= PRECISION * share:
+        return (f"converged to the data's precision: the last "
+                f"{PRECISION_WINDOW} steps lowered the cost by "
+                f"{sum(recent):.1e} of it, the next is predicted to lower "
+                f"it by {predicted:.1e} (one standard error of the "
+                f"parameters is worth {share:.1e})")
+    return None
+
+
 class _OutputError:
     """The linear output-error cost of one `fit_oe` call and its
     Levenberg-Marquardt run."""
@@ -352,6 +366,9 @@ class _OutputError:
             v = [np.cumsum(part) for part in v]
         self.v, self.ys = v, _segs(y)
         self.y = np.concatenate(self.ys)
+        # p / N: the relative cost of a standard error (`PRECISION`)
+        self.share = (self.nb + self.m + (len(self.ys) if offsets else 0)) \
+            / self.y.size
 
     def centre(self, x):
         return _centred(x, self.ys, self.offsets)
@@ -388,9 +405,6 @@ class _OutputError:
         floor = 1e-24 * (0.5 * (self.y @ self.y))   # rounding: an exact fit
         mu, nit, converged = 1e-4, 0, False
         message = f"reached max_iter = {max_iter}"
-        # p / N: the relative cost of a standard error (`PRECISION`)
-        share = (s['theta'].size + (len(self.ys) if self.offsets else 0)) \
-            / self.y.size
         recent = []                 # the last steps' relative decreases
         for nit in range(max_iter + 1):
             s['a'], g, s['d'] = self.normal(s['b'], s['fp'], s['yhat'])
@@ -402,15 +416,9 @@ class _OutputError:
                            f"{predicted / max(cost, 1e-300):.1e} <= tol"
                            if cost > floor else "converged: exact fit")
                 break
-            if len(recent) == PRECISION_WINDOW and predicted <= share * cost \
-                    and sum(recent) <= PRECISION * share:
-                converged = True
-                message = (f"converged to the data's precision: the last "
-                           f"{PRECISION_WINDOW} steps lowered the cost by "
-                           f"{sum(recent):.1e} of it, the next is predicted "
-                           f"to lower it by {predicted / cost:.1e} (one "
-                           f"standard error of the parameters is worth "
-                           f"{share:.1e})")
+            done = _precise(recent, predicted / cost, self.share)
+            if done:
+                converged, message = True, done
                 break
             if nit == max_iter:
                 break
