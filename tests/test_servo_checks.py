@@ -373,6 +373,41 @@ def test_a_small_speed_record_designs_the_pid_without_its_nyquist_mode():
     assert got[0]['rms'] <= got[1]['rms'] and got[0]['hunting'] < 3
 
 
+def test_a_linear_models_own_design_damps_its_nyquist_mode_too():
+    """A linear result is designed as a sandwich's baseline is: a real
+    pole near -1 above the band the record measured is damped for the PID
+    where that PID meets the margin on the model as fitted too (on an
+    axis of benchmarks/bench_servo_foreign.py only the sandwich's design
+    damped it, and its PD used 5.3 times the linear design's input
+    activity); a pole the PID needs stays, and so does every pole of a
+    model without data (no response)."""
+    dt = 0.001
+    limit = lambda num, den: None                          # noqa: E731
+    measured = lambda num, den: None                       # noqa: E731
+    speed = np.polymul(np.polymul([1.0, -1.0], [1.0, -0.9]), [1.0, 0.995])
+    for base, kept in (
+            (ct.tf([1e-3, 0.0], speed, dt), False),
+            (ct.tf([0.02, 0.0], np.polymul([1.0, -0.95], [1.0, 0.99]), dt),
+             True)):
+        notes, info = [], {}
+        P, pid = _servo_linear.tamed_model(
+            base, (None, 0.03), 0.6, check_plant_tf, limit, measured,
+            notes=notes, info=info)
+        assert len(notes) == 1
+        if kept:
+            assert P is base and pid is None and "kept as" in notes[0]
+            continue
+        assert sorted(np.round(P.poles().real, 6)) == [-0.5, 0.9, 1.0]
+        assert "the model with its pole(s) at -0.995" in notes[0]
+        num, den = check_plant_tf('model', base)
+        margin, _, _, radius = _servo_design.loop_margins(
+            num, den, _servo_design.pid_tf(*pid, dt))
+        assert radius < 1 and margin >= 0.98 * 0.6
+        assert _servo_linear.tamed_model(
+            base, None, 0.6, check_plant_tf, limit, measured, notes=[],
+            info={}) == (base, None)
+
+
 def test_a_real_nyquist_mode_the_pid_needs_is_kept():
     """A baseline whose pole at -0.99 is the plant's own (an aggressive
     digital loop rings at the Nyquist frequency), above the band the data

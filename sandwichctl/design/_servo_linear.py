@@ -2,7 +2,8 @@
 on the result's linear baseline or on the sandwich's mbar L1 L2, the
 feedforward inverting the one or the other (`linear_part`), the baseline
 with its real modes at the Nyquist frequency damped where the PID so
-designed holds on the baseline as fitted (`tamed_part`), the drift terms
+designed holds on the baseline as fitted (`tamed_part`; a linear model's
+own design likewise, `tamed_model`), the drift terms
 (a pole at z = 1 beside a zero) cancelled from a model first, and the
 design's note on the linear feedforward (`ff_note`)."""
 
@@ -184,6 +185,54 @@ def tamed_part(model, result, lin_model, feedback_from, feedforward_from,
                          "frequency kept as fitted: a PID designed with "
                          "them damped would not meet the margin on it")
     return linear_part(model, result, lin_model, *rest, info=info)
+
+
+def only_itself(**choices):
+    """Refuse a choice between a sandwich's own linear part and its
+    baseline (feedforward_from, feedback_from) for a linear model."""
+    for key, choice in choices.items():
+        if choice != 'auto':
+            raise ValueError(
+                f"{key}={choice!r} chooses between a sandwich's own "
+                f"linear part and its linear baseline, and a linear "
+                f"model is only itself: leave it out")
+
+
+def tamed_model(model, response, mm, check_plant, limit, measured, *,
+                notes, info):
+    """A linear model's own design plant and PID (P, pid): the model with
+    its real modes at the Nyquist frequency damped (`nyquist_tamed`) and
+    the PID designed on it, where that PID also meets the modulus margin
+    on the model as fitted (`TAMED_MARGIN`), told in `notes`, as
+    `tamed_part` does for a sandwich's baseline; else (model, None). The
+    linear design of a record must treat such a mode as the sandwich's
+    does: on an axis whose baseline had one at -0.9869 the sandwich's PD,
+    designed without it, used 5.3 times the input activity of the linear
+    design's, which held the mode (benchmarks/bench_servo_foreign.py,
+    axis 3, speed loop, 9 um)."""
+    said = []
+    tamed = nyquist_tamed(model, response, said)
+    if tamed is model:
+        return model, None
+    num, den = check_plant('the design plant', tamed)
+    trial = {}
+    try:
+        pid = design_pid(num, den, tamed.dt, mm, limit(num, den),
+                         measured(num, den), trial)
+    except ValueError:           # no PID on the damped model: as fitted
+        return model, None
+    margin, _, _, radius = loop_margins(*check_plant('model', model),
+                                        pid_tf(*pid, model.dt))
+    if radius < 1 and margin >= TAMED_MARGIN * mm:
+        info.update(trial)
+        notes.append(f"{said[0].replace('linear baseline', 'model')}; its "
+                     f"PID meets modulus margin {margin:.3g} on the model "
+                     f"as fitted too")
+        return tamed, pid
+    notes.append("the model's real modes at the Nyquist frequency kept as "
+                 "fitted: a PID designed with them damped would not meet "
+                 "the margin on it")
+    return model, None
 
 
 #: a pole at z = 1 with a zero this close to it is a drift term of the

@@ -552,14 +552,11 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
             lambda n, d: limit(n, d)[0], measured, response=response,
             notes=notes, info=info)
     else:
-        P, linear_note, pid = model, None, None
-        for key, choice in (('feedforward_from', feedforward_from),
-                            ('feedback_from', feedback_from)):
-            if choice != 'auto':
-                raise ValueError(
-                    f"{key}={choice!r} chooses between a sandwich's own "
-                    f"linear part and its linear baseline, and a linear "
-                    f"model is only itself: leave it out")
+        sl.only_itself(feedforward_from=feedforward_from,
+                       feedback_from=feedback_from)
+        linear_note, (P, pid) = None, sl.tamed_model(
+            model, response, mm, check_plant_tf, lambda n, d: limit(n, d)[0],
+            measured, notes=notes, info=info)
     num, den = check_plant_tf('model' if P is model else 'the design plant',
                               P)
     dt = P.dt
