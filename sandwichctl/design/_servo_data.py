@@ -175,7 +175,7 @@ def _tamed(block, select, moved):
     return ct.tf(num * np.real(dc), np.real(np.poly(new)), block.dt)
 
 
-def nyquist_tamed(baseline, response, notes):
+def nyquist_tamed(baseline, response, notes, what='the linear baseline'):
     """The linear `baseline` a sandwich's PID is designed on, with its real
     poles on the negative axis that no data vouch for (`wild_poles`)
     damped like `checked_model`'s, told in `notes`. Such a pole is an
@@ -186,7 +186,8 @@ def nyquist_tamed(baseline, response, notes):
     a speed loop identified from a record at a tenth of the usual
     amplitude had one at -0.9869; the PD designed on it held that mode, its
     derivative gain fell to 9.8 and the loop tracked the drive at 16.3 um,
-    1.21 times the linear design's error (6.5 um with the pole damped)."""
+    1.21 times the linear design's error (6.5 um with the pole damped).
+    `what` names the model in the note."""
     if response is None or not isinstance(baseline, ct.TransferFunction):
         return baseline
     moved = []
@@ -194,7 +195,7 @@ def nyquist_tamed(baseline, response, notes):
                       & (np.abs(p.imag) < 1e-9) & (p.real < 0), moved)
     if moved:
         notes.append(
-            f"the PID is designed on the linear baseline with its pole(s) at "
+            f"the PID is designed on {what} with its pole(s) at "
             f"{_fmt_roots(np.array(moved))} damped to radius {TAMED:g} (DC "
             f"gain kept): real modes at the Nyquist frequency, above the "
             f"band the record measured reliably ({response[1]:.3g} "

@@ -172,19 +172,31 @@ def tamed_part(model, result, lin_model, feedback_from, feedforward_from,
     tamed = nyquist_tamed(lin_model, response, said)
     if tamed is not lin_model:
         got = linear_part(model, result, tamed, *rest, info=trial)
-        if got[0] is tamed and got[1] is not None:
-            num, den = check_plant('the baseline', lin_model)
-            margin, _, _, radius = loop_margins(
-                num, den, pid_tf(*got[1], lin_model.dt))
-            if radius < 1 and margin >= TAMED_MARGIN * mm:
-                info.update(trial)
-                notes.append(f"{said[0]}; its PID meets modulus margin "
-                             f"{margin:.3g} on the baseline as fitted too")
-                return got
-            notes.append("the linear baseline's real modes at the Nyquist "
-                         "frequency kept as fitted: a PID designed with "
-                         "them damped would not meet the margin on it")
+        if got[0] is tamed and got[1] is not None and _holds_as_fitted(
+                (*check_plant('the baseline', lin_model), lin_model.dt),
+                got[1], mm, ('the baseline', 'the linear baseline'), said,
+                notes):
+            info.update(trial)
+            return got
     return linear_part(model, result, lin_model, *rest, info=info)
+
+
+def _holds_as_fitted(fitted, pid, mm, names, said, notes):
+    """Whether the PID `pid` (kp, ki, kd, pole), designed with the real
+    modes of `fitted` (num, den, dt) at the Nyquist frequency damped
+    (`said`: `nyquist_tamed`'s note), meets `TAMED_MARGIN` of the modulus
+    margin `mm` on `fitted` as it is, told in `notes`; `names` are the
+    plant's short and long names."""
+    num, den, dt = fitted
+    margin, _, _, radius = loop_margins(num, den, pid_tf(*pid, dt))
+    if radius < 1 and margin >= TAMED_MARGIN * mm:
+        notes.append(f"{said[0]}; its PID meets modulus margin "
+                     f"{margin:.3g} on {names[0]} as fitted too")
+        return True
+    notes.append(f"{names[1]}'s real modes at the Nyquist frequency kept "
+                 f"as fitted: a PID designed with them damped would not "
+                 f"meet the margin on it")
+    return False
 
 
 def only_itself(**choices):
@@ -211,9 +223,10 @@ def tamed_model(model, response, mm, check_plant, limit, measured, *,
     design's, which held the mode (benchmarks/bench_servo_foreign.py,
     axis 3, speed loop, 9 um)."""
     said = []
-    tamed = nyquist_tamed(model, response, said)
+    tamed = nyquist_tamed(model, response, said, 'the model')
     if tamed is model:
         return model, None
+    fitted = (*check_plant('model', model), model.dt)
     num, den = check_plant('the design plant', tamed)
     trial = {}
     try:
@@ -221,17 +234,10 @@ def tamed_model(model, response, mm, check_plant, limit, measured, *,
                          measured(num, den), trial)
     except ValueError:           # no PID on the damped model: as fitted
         return model, None
-    margin, _, _, radius = loop_margins(*check_plant('model', model),
-                                        pid_tf(*pid, model.dt))
-    if radius < 1 and margin >= TAMED_MARGIN * mm:
+    if _holds_as_fitted(fitted, pid, mm, ('the model', 'the model'), said,
+                        notes):
         info.update(trial)
-        notes.append(f"{said[0].replace('linear baseline', 'model')}; its "
-                     f"PID meets modulus margin {margin:.3g} on the model "
-                     f"as fitted too")
         return tamed, pid
-    notes.append("the model's real modes at the Nyquist frequency kept as "
-                 "fitted: a PID designed with them damped would not meet "
-                 "the margin on it")
     return model, None
 
 
