@@ -543,10 +543,14 @@ def summary(checks, names):
         near = [ratio(c, 'near_reversals', name) for c in good]
         act = [ratio(c, 'activity', name) for c in good]
         worst = good[int(np.argmax(rms))]['label']
+        over = [f"{c['label']} {c['play'] * 1e6:.0f} ({a:.2f}, {b:.2f})"
+                for c, a, b in zip(good, rms, near) if a > 1.05 or b > 1]
         print(f"{name} RMS / linear: median {np.median(rms):.2f}, worst "
               f"{max(rms):.2f} ({worst}) (target <= 1.05)")
         print(f"{name} near-reversal error / linear: median "
               f"{np.median(near):.2f}, worst {max(near):.2f} (target <= 1)")
+        print(f"{name} over a target (RMS, near-reversal ratios): "
+              + (", ".join(over) if over else "none"))
         sat = max(c['got'][name]['saturation'] for c in good)
         print(f"{name} input activity / linear: worst {max(act):.2f} "
               f"(target <= 3); saturation worst {sat:.2%} (target <= 1 %)")
