@@ -130,3 +130,55 @@ def test_a_refine_dict_is_checked_before_the_recursive_run():
     y = plant.simulate(u).outputs
     with pytest.raises(TypeError, match="refine=.*'foo'.*max_iter"):
         sw.identify(u, y, **plant.orders, method='rpem', refine={'foo': 1})
+
+
+def test_the_coefficients_an_input_can_determine():
+    from sandwichctl.identification._data import excitation_order
+    t = np.arange(2000)
+    sines = [np.sin(2 * np.pi * t / p) for p in (97.0, 31.0, 11.0)]
+    assert excitation_order([sines[0]], 6) == 2
+    assert excitation_order([sines[0] + 0.3], 6) == 3   # and a constant
+    assert excitation_order([sum(sines) + 500], 8) == 7
+    assert excitation_order([np.ones(2000)], 6) == 1
+    assert excitation_order([np.zeros(2000)], 6) == 0
+    step = np.r_[np.zeros(100), np.ones(1900)]          # its edge: all
+    assert excitation_order([step], 6) == 6
+    noise = np.random.default_rng(0).standard_normal(2000)
+    assert excitation_order([noise], 10) == 10
+    # every experiment must satisfy the recurrence: one sinusoid in each
+    # of three is three
+    assert excitation_order([s[:500] for s in sines], 8) == 6
+
+
+def test_a_single_sinusoid_does_not_determine_a_second_order_l1():
+    # L1 of the paper's plant has na + nb + 1 = 3 coefficients; one
+    # sinusoid fixes its phase at one frequency only (its gain trades
+    # with m and D), so the fit, however close, is no success
+    u = 3 * np.sin(2 * np.pi * np.arange(2400) / 97.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', sw.IdentificationWarning)
+        res = sw.identify(u, PLANT.simulate(u).outputs, **O)
+    assert res.fit > 90 and not res.success
+    assert res.message.startswith("the input satisfies a recurrence of 2 "
+                                  "taps (as 1 sinusoid does), so it "
+                                  "determines at most 2 of the 3 "
+                                  "coefficients of L1")
+    # two sinusoids can determine four: the check is silent on them
+    u = u + 2 * np.sin(2 * np.pi * np.arange(2400) / 23.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', sw.IdentificationWarning)
+        res = sw.identify(u, PLANT.simulate(u).outputs, **O)
+    assert 'the input satisfies a recurrence' not in res.message
+
+
+def test_a_linear_fit_needs_as_many_taps_as_coefficients():
+    u = 3 * np.sin(2 * np.pi * np.arange(1000) / 97.0)
+    y = np.convolve(u, [0.0, 0.5, 0.3, 0.1])[:u.size]
+    first = sw.identify_linear(u, y, nb=1, nf=1)     # gain and phase
+    assert 'the input satisfies a recurrence' not in first.message
+    res = sw.identify_linear(u, y, nb=2, nf=2)
+    assert not res.success
+    assert res.message.startswith("the input satisfies a recurrence of 2 "
+                                  "taps (as 1 sinusoid does), so it "
+                                  "determines at most 2 of the 4 "
+                                  "coefficients of the model")

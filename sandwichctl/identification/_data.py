@@ -145,3 +145,62 @@ def leading(parts, n):
         return parts
     return [part[:max(50, int(np.ceil(n * part.size / total)))]
             for part in parts]
+
+
+#: An input satisfies a recurrence of k taps when the best one leaves
+#: less than this share of what the k-th difference leaves (the
+#: recurrence of a smooth signal's polynomial trend): a sinusoid computed
+#: in floating point leaves about 1e-12 of it in two taps.
+EXACT_RECURRENCE = 1e-8
+#: Leading samples of each experiment the recurrences are fitted on.
+RECURRENCE_SAMPLES = 100_000
+
+
+def excitation_order(us, n):
+    """How many coefficients (at most n) the input experiments `us` can
+    determine of a linear block: the fewest taps k of a recurrence
+    u(j) = c1 u(j-1) + ... + ck u(j-k) that every experiment satisfies
+    (to `EXACT_RECURRENCE` of what the k-th difference leaves), else n.
+    A constant satisfies one tap, a sinusoid two, a sum of s sinusoids
+    2 s, a sinusoid about a constant three; steps, noise and broadband
+    records none of fewer than n. A block of n coefficients is
+    determined by the data only where it is n (the input is
+    "persistently exciting of order n")."""
+    cols, target, diffs = [], [], np.zeros(n)
+    for part in us:
+        part = np.asarray(part, float)[:RECURRENCE_SAMPLES]
+        if part.size <= n:
+            continue
+        lagged = np.lib.stride_tricks.sliding_window_view(part, n + 1)
+        cols.append(lagged[:, n - 1::-1])       # u(j-1), ..., u(j-n)
+        target.append(lagged[:, n])
+        diffs += [np.sum(np.diff(lagged[:, n - k:], k, axis=1) ** 2)
+                  for k in range(1, n + 1)]
+    if not cols:
+        return n
+    A = np.column_stack([np.concatenate(cols), np.concatenate(target)])
+    size = float(np.sum(A[:, -1] ** 2))
+    if not np.isfinite(size) or size == 0:
+        return 0
+    r = np.linalg.qr(A, mode='r')
+    # the target's residual on the first k lags: the tail of R's last
+    # column from row k on
+    left = np.cumsum(r[::-1, -1] ** 2)[::-1]
+    for k in range(1, n + 1):
+        if left[k] <= EXACT_RECURRENCE ** 2 * diffs[k - 1] + 1e-24 * size:
+            return k
+    return n
+
+
+def input_order_text(got, need, what):
+    """The failure of an input whose `excitation_order` `got` is below
+    the `need` coefficients of the block `what`."""
+    lines = ("nothing" if got == 0 else "a constant" if got == 1 else
+             f"{got // 2} sinusoid" + ("s" if got // 2 > 1 else "")
+             + (" about a constant" if got % 2 else ""))
+    return (f"the input satisfies a recurrence of {got} taps (as {lines} "
+            f"does), so it determines at most {got} of the {need} "
+            f"coefficients of {what}: the data do not determine the model, "
+            f"and it need not hold for another input (excite more "
+            f"frequencies: steps, a multisine or random steps; or lower "
+            f"the orders)")

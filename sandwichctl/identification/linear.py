@@ -43,7 +43,8 @@ import numpy as np
 import control as ct
 from scipy.optimize import OptimizeResult
 
-from ._data import input_offset, prepare, scale, scaled, with_shift
+from ._data import (excitation_order, input_offset, input_order_text,
+                    prepare, scale, scaled, with_shift)
 from ._linear import fit_oe_auto, fit_output, max_root, RADIUS
 from .result import INPUT_OFFSET, MIN_FIT, input_offset_text
 from .._checks import (check_int, check_positive, check_tolerance, check_dt,
@@ -159,18 +160,24 @@ def _check_orders(n, nb, nf, nk, integrators):
     return nb, nf, nk, integrators
 
 
-def _verdict(out, b, f, fit, choice, offset):
+def _verdict(out, b, f, fit, choice, us, *, free):
     """(success, message) of a linear fit `out` with coefficients b, f in
-    the user's units, its `fit`, the sentence of the integrator `choice`
-    and the data's `input_offset`."""
+    the user's units, its `fit`, the sentence of the integrator `choice`,
+    the input experiments `us` (their `input_offset`, and the directions
+    they excite against the model's `free` coefficients)."""
     finite = bool(np.all(np.isfinite(b)) and np.all(np.isfinite(f)))
     stable = max_root(out['Ff']) < RADIUS
+    offset = input_offset(us)
+    got = excitation_order(us, free)
     success = (finite and stable and out['converged'] and fit > MIN_FIT
-               and not offset > INPUT_OFFSET)
+               and not offset > INPUT_OFFSET and got >= free)
     message = out['message'] + choice
     if out['converged'] and not fit > MIN_FIT:
         message += (f"; fit {fit:.3g} % <= {MIN_FIT:g} %: the model "
                     f"explains next to nothing of y")
+    if got < free:
+        message = (input_order_text(got, free, 'the model') +
+                   f" [{message}]")
     if offset > INPUT_OFFSET:
         message = input_offset_text(offset) + f" [{message}]"
     return success, message
@@ -300,7 +307,7 @@ def identify_linear(u, y=None, nb=None, nf=None, nk=1, dt=True,
 
     model = oe_transfer_function(b, f, nk, dt, name)
 
-    success, message = _verdict(out, b, f, fit, choice, input_offset(us))
+    success, message = _verdict(out, b, f, fit, choice, exact, free=nb + m)
     labels = ([f"b{j}" for j in range(1, nb + 1)]
               + [f"f'{i}" for i in range(1, m + 1)])
     return LinearIdentificationResult(

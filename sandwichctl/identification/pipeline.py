@@ -59,7 +59,7 @@ import warnings
 
 import numpy as np
 
-from ._data import input_offset, prepare, with_shift
+from ._data import excitation_order, input_offset, prepare, with_shift
 from ._long import is_long, long_search
 from ._options import OEOptions, RECURSIVE, method_options
 from ._predictor import padding
@@ -295,7 +295,8 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     result.offsets = with_shift(offset_info, estimated)
     moving = _excitation(result.model, us)
     result.excitation = np.nan if moving is None else moving
-    judge(result, verdict(excitation=moving, input_offset=input_offset(us)))
+    judge(result, verdict(excitation=moving, input_offset=input_offset(us),
+                          input_order=_input_order(result, us, orders)))
     _warn_mean_integrating(result, offsets)
     return result
 
@@ -432,6 +433,16 @@ def _against_linear(result, u, y, orders, dt):
         return {}
     return dict(fit=result.fit, linear=result.linear,
                 cost_scaled=cost_scaled, method=result.method)
+
+
+def _input_order(result, us, orders):
+    """(got, need, 'L1'): the directions of lagged inputs the data `us`
+    excite, and the coefficients of L1 (na + nb + 1, its integrators
+    fixed): a single sinusoid determines two, the phase and gain of L1 at
+    its frequency, and L1's gain trades with the backlash's m and D."""
+    fixed = (result.get('integrators') or {}).get('L1', 0)
+    need = orders['na'] - fixed + orders['nb'] + 1
+    return excitation_order(us, need), need, 'L1'
 
 
 def _excitation(model, us):

@@ -17,6 +17,7 @@ from scipy.optimize import OptimizeResult
 from .._checks import (_real_array, check_reference, check_vector, warn,
                        ExcitationWarning, IdentificationWarning)
 from ..model._coefficients import signed_theta
+from ._data import input_order_text
 
 __all__ = ['IdentificationResult', 'parameter_error']
 
@@ -54,7 +55,7 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
             zeros_at_bound=(), zero_radius=None, fit=None, min_fit=MIN_FIT,
             linear=None, cost_scaled=None, method='oe', std=None, theta=None,
             labels=(), excitation=None, minimum_phase_bound=None,
-            input_offset=None):
+            input_offset=None, input_order=None):
     """The checks an identified model fails, in the order they are told.
 
     Every argument is one fact about the model; a fact left at None is
@@ -92,6 +93,10 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
     input_offset : float
         The largest |u[0]| / std(u) of the experiments: above
         `INPUT_OFFSET` the record starts at an operating point.
+    input_order : tuple
+        (got, need, what): the input excites `got` directions of lagged
+        inputs (`_data.excitation_order`) where the block `what` has
+        `need` coefficients; fewer than need do not determine them.
 
     Returns
     -------
@@ -132,6 +137,8 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
                            "never worse") + _held(linear))
     if input_offset is not None and input_offset > INPUT_OFFSET:
         fail('input_offset', input_offset_text(input_offset))
+    if input_order is not None and input_order[0] < input_order[1]:
+        fail('input_order', input_order_text(*input_order))
     if std is not None:
         ill = ~np.isfinite(std) | (std > POORLY_DETERMINED * np.maximum(
             np.abs(theta), 1e-3))
