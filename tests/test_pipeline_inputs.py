@@ -145,6 +145,9 @@ def test_the_coefficients_an_input_can_determine():
     assert excitation_order([step], 6) == 6
     noise = np.random.default_rng(0).standard_normal(2000)
     assert excitation_order([noise], 10) == 10
+    # in any units (no overflow nor underflow at the float's ends)
+    assert excitation_order([noise * 1e300], 10) == 10
+    assert excitation_order([sines[0] * 1e-300], 6) == 2
     # every experiment must satisfy the recurrence: one sinusoid in each
     # of three is three
     assert excitation_order([s[:500] for s in sines], 8) == 6

@@ -171,6 +171,8 @@ def excitation_order(us, n):
         part = np.asarray(part, float)[:RECURRENCE_SAMPLES]
         if part.size <= n:
             continue
+        top = float(np.max(np.abs(part)))
+        part = part / top if top > 0 else part      # any units
         lagged = np.lib.stride_tricks.sliding_window_view(part, n + 1)
         cols.append(lagged[:, n - 1::-1])       # u(j-1), ..., u(j-n)
         target.append(lagged[:, n])
