@@ -145,6 +145,10 @@ def test_the_coefficients_an_input_can_determine():
     assert excitation_order([step], 6) == 6
     noise = np.random.default_rng(0).standard_normal(2000)
     assert excitation_order([noise], 10) == 10
+    # a record at rest past the leading samples checked first
+    assert excitation_order([np.r_[np.zeros(30000), noise]], 10) == 10
+    # a sinusoid switched on from rest: its switch is a step's transient
+    assert excitation_order([np.r_[np.zeros(100), sines[0]]], 6) == 6
     # in any units (no overflow nor underflow at the float's ends)
     assert excitation_order([noise * 1e300], 10) == 10
     assert excitation_order([sines[0] * 1e-300], 6) == 2

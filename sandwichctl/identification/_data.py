@@ -152,8 +152,10 @@ def leading(parts, n):
 #: recurrence of a smooth signal's polynomial trend): a sinusoid computed
 #: in floating point leaves about 1e-12 of it in two taps.
 EXACT_RECURRENCE = 1e-8
-#: Leading samples of each experiment the recurrences are fitted on.
-RECURRENCE_SAMPLES = 100_000
+#: Leading samples of each experiment the recurrences are fitted on
+#: first; the whole record only when those satisfy one (a record at rest
+#: for its first samples, or an input that does not excite).
+RECURRENCE_SAMPLES = 20_000
 
 
 def excitation_order(us, n):
@@ -163,12 +165,23 @@ def excitation_order(us, n):
     (to `EXACT_RECURRENCE` of what the k-th difference leaves), else n.
     A constant satisfies one tap, a sinusoid two, a sum of s sinusoids
     2 s, a sinusoid about a constant three; steps, noise and broadband
-    records none of fewer than n. A block of n coefficients is
+    records none of fewer than n (a sinusoid switched on from rest in the
+    record counts as a step does: its switch is a transient that tells
+    L1, as a step's edge does). A block of n coefficients is
     determined by the data only where it is n (the input is
     "persistently exciting of order n")."""
+    got = _recurrence(us, n, RECURRENCE_SAMPLES)
+    if got < n and any(np.size(part) > RECURRENCE_SAMPLES for part in us):
+        got = _recurrence(us, n, None)
+    return got
+
+
+def _recurrence(us, n, samples):
+    """`excitation_order` on the leading `samples` of each experiment
+    (all of them for None)."""
     cols, target, diffs = [], [], np.zeros(n)
     for part in us:
-        part = np.asarray(part, float)[:RECURRENCE_SAMPLES]
+        part = np.asarray(part, float)[:samples]
         if part.size <= n:
             continue
         top = float(np.max(np.abs(part)))
@@ -176,7 +189,8 @@ def excitation_order(us, n):
         lagged = np.lib.stride_tricks.sliding_window_view(part, n + 1)
         cols.append(lagged[:, n - 1::-1])       # u(j-1), ..., u(j-n)
         target.append(lagged[:, n])
-        diffs += [np.sum(np.diff(lagged[:, n - k:], k, axis=1) ** 2)
+        # the k-th difference ending at each target u(j)
+        diffs += [np.sum(np.diff(part, k)[n - k:] ** 2)
                   for k in range(1, n + 1)]
     if not cols:
         return n
