@@ -116,6 +116,10 @@ def _set_kp():
     sw.servo_controller(PLANT).kp = 1e6
 
 
+def _del_kp():
+    del sw.servo_controller(PLANT).kp
+
+
 def _nan_at(k, n=N):
     x = np.ones(n)
     x[k] = np.nan
@@ -768,6 +772,8 @@ ROWS = [
     ('ServoController-partial-design',
      lambda t: sw.ServoController({'_fb': None}), TE, 'servo_controller'),
     ('ServoController-kp-read-only', lambda t: _set_kp(), AttributeError,
+     'read-only'),
+    ('ServoController-kp-del', lambda t: _del_kp(), AttributeError,
      'read-only'),
     ('closed_loop_response-plant-read-not-callable',
      lambda t: sw.closed_loop_response(_ReadNotCallable(0.0), U,

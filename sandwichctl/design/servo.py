@@ -194,13 +194,10 @@ class ServoController(ct.NonlinearIOSystem):
         self._design = design
         self.__dict__.update({k: v for k, v in design.items()
                               if not k.startswith('_')})
-        p, ix, nstate = pack(design['_fb'], design['_pre'], design['_post'],
-                             design['_linear'], design['_ps'],
-                             design['_other'], design['_scalars'],
-                             design['preview'], design['_lead'],
-                             design['compensates'], design['adapts'],
-                             design['blends'],
-                             design.get('_delays', (0, 0)))
+        p, ix, nstate = pack(*(design[k] for k in (
+            '_fb', '_pre', '_post', '_linear', '_ps', '_other', '_scalars',
+            'preview', '_lead', 'compensates', 'adapts', 'blends')),
+            design.get('_delays', (0, 0)))
         self._p, self._ix = p, ix
         self._s = np.zeros(nstate)
         self._keep = np.zeros(nstate)       # the memory before a step
@@ -309,6 +306,11 @@ class ServoController(ct.NonlinearIOSystem):
                                  f"compiled controller would not see it): "
                                  f"design again with sw.servo_controller")
         super().__setattr__(name, value)
+
+    def __delattr__(self, name):
+        if self.__dict__.get('_built') and name in self._design:
+            raise AttributeError(f"ServoController.{name} is read-only")
+        super().__delattr__(name)
 
     copy = named_copy            # its name checked
 
