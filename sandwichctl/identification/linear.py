@@ -163,8 +163,9 @@ def _check_orders(n, nb, nf, nk, integrators):
 def _verdict(out, b, f, fit, choice, us, *, free):
     """(success, message) of a linear fit `out` with coefficients b, f in
     the user's units, its `fit`, the sentence of the integrator `choice`,
-    the input experiments `us` (their `input_offset`, and the directions
-    they excite against the model's `free` coefficients)."""
+    the input experiments `us` (their `input_offset`, and how many
+    coefficients they can determine, `excitation_order`, against the
+    model's `free` ones)."""
     finite = bool(np.all(np.isfinite(b)) and np.all(np.isfinite(f)))
     stable = max_root(out['Ff']) < RADIUS
     offset = input_offset(us)

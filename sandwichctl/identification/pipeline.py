@@ -436,10 +436,11 @@ def _against_linear(result, u, y, orders, dt):
 
 
 def _input_order(result, us, orders):
-    """(got, need, 'L1'): the directions of lagged inputs the data `us`
-    excite, and the coefficients of L1 (na + nb + 1, its integrators
-    fixed): a single sinusoid determines two, the phase and gain of L1 at
-    its frequency, and L1's gain trades with the backlash's m and D."""
+    """(got, need, 'L1'): how many coefficients the inputs `us` can
+    determine (`_data.excitation_order`), and the coefficients of L1
+    (na + nb + 1, its integrators fixed): a single sinusoid determines
+    two, the phase and gain of L1 at its frequency, and L1's gain trades
+    with the backlash's m and D."""
     fixed = (result.get('integrators') or {}).get('L1', 0)
     need = orders['na'] - fixed + orders['nb'] + 1
     return excitation_order(us, need), need, 'L1'

@@ -94,9 +94,10 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
         The largest |u[0]| / std(u) of the experiments: above
         `INPUT_OFFSET` the record starts at an operating point.
     input_order : tuple
-        (got, need, what): the input excites `got` directions of lagged
-        inputs (`_data.excitation_order`) where the block `what` has
-        `need` coefficients; fewer than need do not determine them.
+        (got, need, what): the input can determine `got` coefficients
+        (`_data.excitation_order`: the taps of the shortest recurrence it
+        satisfies) where the block `what` has `need`; fewer than need do
+        not determine them.
 
     Returns
     -------
