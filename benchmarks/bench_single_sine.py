@@ -3,7 +3,10 @@
 Each case is a seeded random plant (``sw.data.random_case``, its true
 orders) identified from an input of its own: one sinusoid (a period of
 20-200 samples), two, or eight, at the spread of the case's own input,
-with 1 % output noise (N = 3000). The table gives:
+with 1 % output noise (N = 3000). With ``--bits 16`` the input is
+rounded to a grid of 2^16 steps over its range first, as a DAC or a
+logger rounds it: the recurrence then holds only up to the rounding
+(`sandwichctl.identification._data.quantum`). The table gives:
 
 - ``need``: the coefficients of L1 (na + nb + 1 less its integrators),
   and ``order``: how many the input can determine, the taps of the
@@ -20,6 +23,7 @@ with 1 % output noise (N = 3000). The table gives:
   reason of a failure.
 
 Run: python benchmarks/bench_single_sine.py [--cases 8] [--n 3000]
+                                           [--bits 16]
 """
 
 import os
@@ -54,6 +58,8 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument('--cases', type=int, default=8)
     ap.add_argument('--n', type=int, default=3000)
+    ap.add_argument('--bits', type=int, default=0,
+                    help='round the input to this many bits (0: not)')
     args = ap.parse_args()
     rows, told = [], {}
     for seed in range(args.cases):
@@ -62,6 +68,9 @@ def main():
         fresh = plant.simulate(case.u).outputs
         for count in (1, 2, 8):
             u = sines(count, args.n, 1.4 * np.std(case.u), rng)
+            if args.bits:
+                step = np.ptp(u) / 2 ** args.bits
+                u = step * np.round(u / step)
             y = plant.simulate(u).outputs
             y = y + 0.01 * np.std(y) * rng.standard_normal(args.n)
             with warnings.catch_warnings():
@@ -80,7 +89,8 @@ def main():
                          f"{res.fit:.1f}", f"{float(check.fit):.1f}",
                          res.success, before, reason])
     print(f"Random plants identified from sinusoids (N = {args.n}, 1 % "
-          f"output noise); fits in %\n")
+          f"output noise" + (f", the input rounded to {args.bits} bits"
+                              if args.bits else "") + "); fits in %\n")
     print_table(['seed', 'sines', 'need', 'order', 'fit', 'fresh',
                  'success', 'before', 'first reason of a failure'], rows)
     print("\nsuccess=True (before the check -> now), and the fresh fits "

@@ -189,3 +189,59 @@ def test_a_linear_fit_needs_as_many_taps_as_coefficients():
                                   "taps (as 1 sinusoid does), so it "
                                   "determines at most 2 of the 4 "
                                   "coefficients of the model")
+
+
+def test_an_input_rounded_to_a_grid_satisfies_its_recurrence_up_to_it():
+    from sandwichctl.identification._data import excitation_order, quantum
+    t = np.arange(3000)
+    rng = np.random.default_rng(1)
+
+    def rounded(u, bits):
+        step = np.ptp(u) / 2 ** bits
+        return step * np.round(u / step)
+
+    sine = np.sin(2 * np.pi * t / 97.0 + 0.4)
+    fast = np.sin(2 * np.pi * t / 20.0 + 0.4)
+    assert excitation_order([rounded(sine, 16)], 6) == 2
+    for bits in (8, 12, 16):
+        assert excitation_order([rounded(fast, bits)], 6) == 2
+    assert excitation_order([rounded(fast + 0.3, 16) * 1e-3], 6) == 3
+    # where the grid is too coarse to tell a sinusoid's curvature from
+    # the rounding, the exact test stands: a slow one is not caught, and
+    # a multisine of slow sinusoids is no recurrence of fewer taps
+    assert excitation_order([rounded(sine, 10)], 6) == 6
+    slow = sum(np.sin(2 * np.pi * t / p + rng.uniform(0, 6))
+               for p in rng.uniform(200, 2000, 8))
+    assert excitation_order([rounded(slow, 12)], 8) == 8
+    # the grid is found in any units and with its offset; not where the
+    # values are off it, nor on a grid of a few levels
+    u = rounded(sine, 16)
+    assert quantum(u) == pytest.approx(np.ptp(sine) / 2 ** 16, rel=1e-9)
+    assert quantum(7.5 + 1e-4 * u) == pytest.approx(
+        1e-4 * np.ptp(sine) / 2 ** 16, rel=1e-6)
+    assert quantum(sine) == 0.0
+    assert quantum(np.sign(rng.standard_normal(3000))) == 0.0
+    # inputs that excite stay exciting when rounded: noise, random steps,
+    # a binary sequence, a sinusoid switched on from rest
+    noise = rng.standard_normal(3000)
+    assert excitation_order([rounded(noise, 12)], 10) == 10
+    steps = np.repeat(rng.uniform(-1, 1, 60), 50)
+    assert excitation_order([rounded(steps, 16)], 10) == 10
+    assert excitation_order([np.sign(noise)], 10) == 10
+    switched = np.r_[np.zeros(100), np.cos(2 * np.pi * t / 97.0)]
+    assert excitation_order([rounded(switched, 16)], 6) == 6
+
+
+def test_a_single_sinusoid_from_a_16_bit_converter_is_no_success():
+    # rounded to the converter's grid, the sinusoid satisfies its
+    # recurrence only to within the rounding: it still determines two
+    # coefficients of L1, not three
+    u = 3 * np.sin(2 * np.pi * np.arange(2400) / 97.0)
+    step = np.ptp(u) / 2 ** 16
+    u = step * np.round(u / step)
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', sw.IdentificationWarning)
+        res = sw.identify(u, PLANT.simulate(u).outputs, **O)
+    assert not res.success
+    assert res.message.startswith("the input satisfies a recurrence of 2 "
+                                  "taps (as 1 sinusoid does)")

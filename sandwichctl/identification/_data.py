@@ -28,6 +28,9 @@ The result's ``offsets`` says what was done: the method, and per
 experiment the removed or estimated input and output offsets.
 """
 
+import math
+from fractions import Fraction
+
 import numpy as np
 
 from ..tools.experiments import as_experiments
@@ -156,13 +159,37 @@ EXACT_RECURRENCE = 1e-8
 #: first; the whole record only when those satisfy one (a record at rest
 #: for its first samples, or an input that does not excite).
 RECURRENCE_SAMPLES = 20_000
+#: An experiment whose values lie on a grid of at least QUANTUM_LEVELS
+#: steps (a DAC's or a logger's resolution) satisfies a recurrence of at
+#: most QUANTUM_TAPS taps (a constant, a sinusoid, a sinusoid about a
+#: constant) also when the best one leaves at most QUANTUM_FACTOR times
+#: what the rounding's error alone would leave (uniform within a step,
+#: independent sample to sample; `_rounded`): a sinusoid rounded to 8 to
+#: 16 bits leaves 0.8 to 1.5 times that in two taps, and 4.6 times it or
+#: more in one. Only where the signal's k-th difference is at least
+#: QUANTUM_POWER times that error, so that the test can tell: the k-th
+#: difference of a slow signal sinks below the rounding, and multisines
+#: of eight slow sinusoids rounded to 12 and 16 bits left less than
+#: twice the rounding's error in three and four taps
+#: (benchmarks/bench_single_sine.py --bits 12); not for more taps, which
+#: a slow signal holds ever more closely.
+QUANTUM_TAPS = 3
+QUANTUM_LEVELS = 64
+QUANTUM_FACTOR = 2.0
+QUANTUM_POWER = 100.0
+#: the least distance between two values of a grid is at most this many
+#: of its steps (`quantum`)
+QUANTUM_DENOMINATOR = 1000
 
 
 def excitation_order(us, n):
     """How many coefficients (at most n) the input experiments `us` can
     determine of a linear block: the fewest taps k of a recurrence
     u(j) = c1 u(j-1) + ... + ck u(j-k) that every experiment satisfies
-    (to `EXACT_RECURRENCE` of what the k-th difference leaves), else n.
+    (to `EXACT_RECURRENCE` of what the k-th difference leaves; for up to
+    `QUANTUM_TAPS` taps also to within what rounding to the grid of
+    an experiment's values leaves, `quantum`: a sinusoid from a 16-bit
+    converter is still one sinusoid), else n.
     A constant satisfies one tap, a sinusoid two, a sum of s sinusoids
     2 s, a sinusoid about a constant three; steps, noise and broadband
     records none of fewer than n (a sinusoid switched on from rest in the
@@ -179,13 +206,15 @@ def excitation_order(us, n):
 def _recurrence(us, n, samples):
     """`excitation_order` on the leading `samples` of each experiment
     (all of them for None)."""
-    cols, target, diffs = [], [], np.zeros(n)
+    cols, target, diffs, noise = [], [], np.zeros(n), 0.0
     for part in us:
         part = np.asarray(part, float)[:samples]
         if part.size <= n:
             continue
         top = float(np.max(np.abs(part)))
         part = part / top if top > 0 else part      # any units
+        # what rounding to the experiment's grid leaves in each sample
+        noise += (part.size - n) * quantum(part) ** 2 / 12
         lagged = np.lib.stride_tricks.sliding_window_view(part, n + 1)
         cols.append(lagged[:, n - 1::-1])       # u(j-1), ..., u(j-n)
         target.append(lagged[:, n])
@@ -205,7 +234,58 @@ def _recurrence(us, n, samples):
     for k in range(1, n + 1):
         if left[k] <= EXACT_RECURRENCE ** 2 * diffs[k - 1] + 1e-24 * size:
             return k
+        if noise > 0 and k <= QUANTUM_TAPS and _rounded(
+                r, k, noise, left[k], diffs[k - 1]):
+            return k
     return n
+
+
+def _rounded(r, k, noise, left, rough):
+    """Whether the input rows with QR factor r (lags, then the target)
+    satisfy the best recurrence of k taps c to within rounding errors of
+    energy `noise` a sample: what it leaves, `left`, is at most
+    `QUANTUM_FACTOR` times what those errors leave through the filter a
+    = (1, -c), while the k-th difference's energy `rough` is at least
+    `QUANTUM_POWER` times it (where the signal's own k-th difference is
+    no larger than the rounding's, as of a slow multisine, a recurrence
+    fitted to within the rounding tells nothing)."""
+    c = np.linalg.lstsq(r[:k, :k], r[:k, -1], rcond=None)[0]
+    floor = noise * (1.0 + float(c @ c))
+    return left <= QUANTUM_FACTOR * floor and rough >= QUANTUM_POWER * floor
+
+
+def quantum(part):
+    """The step of the grid an experiment's values lie on (0 if they do
+    not lie on one of at least `QUANTUM_LEVELS` steps): the distances
+    between neighbouring values are whole numbers of it (to 1 %). It is
+    the least distance over the least common denominator of the others'
+    ratios to it (a periodic record may visit only every tenth level),
+    then refined by least squares on the distances of a few steps."""
+    v = np.unique(part[np.isfinite(part)])
+    if v.size < 16:
+        return 0.0
+    span = float(v[-1] - v[0])
+    # values within rounding of the float of each other are one value
+    gaps = np.diff(v)
+    gaps = gaps[gaps > 1e-9 * span]
+    if gaps.size < 15:
+        return 0.0
+    least, den = float(np.min(gaps)), 1
+    for ratio in np.unique(np.round(gaps / least, 9))[:30]:
+        den = math.lcm(den, Fraction(float(ratio)).limit_denominator(
+            QUANTUM_DENOMINATOR).denominator)
+        if den > QUANTUM_DENOMINATOR:
+            return 0.0
+    q = least / den
+    near = np.round(gaps / q)
+    use = near <= 64
+    if np.any(use):
+        q = float(gaps[use] @ near[use] / (near[use] @ near[use]))
+    ratio = gaps / q
+    if span < QUANTUM_LEVELS * q or np.any(
+            np.abs(ratio - np.round(ratio)) > 0.01):
+        return 0.0
+    return q
 
 
 def input_order_text(got, need, what):
