@@ -102,6 +102,29 @@ def test_an_overflowing_controller_never_drives_the_plant():
     assert applied == []
 
 
+def test_an_input_that_overflows_in_the_loop_is_not_applied(monkeypatch):
+    # the compiled step returns inf at the third sample: the loop stops
+    # with a clear error before handing it to the user's plant
+    from sandwichctl.design import loop
+    applied, real = [], loop.servo_step
+
+    def stepped(p, ix, s, r_ahead, y):
+        return np.inf if len(applied) == 2 else real(p, ix, s, r_ahead, y)
+
+    class Plant:
+        dt = 1
+
+        def step(self, u):
+            applied.append(u)
+            return 0.0
+
+    monkeypatch.setattr(loop, 'servo_step', stepped)
+    with pytest.raises(OverflowError, match='u overflowed at sample 2 '
+                       r'.*not applied to the plant'):
+        sw.closed_loop_response(Plant(), np.ones(10), sw.servo_controller(P))
+    assert len(applied) == 2 and np.all(np.isfinite(applied))
+
+
 def test_a_plant_dt_of_any_numeric_kind_is_compared():
     class Plant:
         def __init__(self, dt):
