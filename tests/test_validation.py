@@ -78,6 +78,32 @@ def test_constant_y_is_rejected(func):
 
 # --- max_relative_error --------------------------------------------------
 
+def test_norms_at_the_ends_of_the_float_range_stay_finite():
+    # each norm is taken in units of its own largest entry: a y of 1e-300
+    # against a yhat of 1 squared its error to inf, and a theta of 1e200
+    # did too
+    y = np.linspace(0.0, 1.0, 50)
+    tiny = y * 1e-300
+    assert sw.nrmse(tiny, np.ones(50)) == pytest.approx(
+        np.sqrt(50) / np.linalg.norm(y - y.mean()) * 1e300, rel=1e-12)
+    assert np.isfinite(sw.fit_percent(tiny, np.ones(50)))
+    assert sw.nrmse(tiny, tiny * 1.01) == pytest.approx(
+        sw.nrmse(y, y * 1.01), rel=1e-12)
+    theta = np.array([0.5, -0.2, 1.0, 3.0])
+    assert sw.parameter_error(theta * 1e200, theta) == pytest.approx(
+        1e200, rel=1e-12)
+    assert sw.parameter_error(theta, theta * 1e-300) == pytest.approx(
+        1e300, rel=1e-12)
+    assert sw.parameter_error(theta * 1e-300 * 1.1, theta * 1e-300) == \
+        pytest.approx(0.1, rel=1e-12)
+    # a diverged estimate in a history: nan or inf for its row, no warning
+    rows = np.vstack([theta, 1.1 * theta, np.r_[np.nan, theta[1:]],
+                      np.r_[np.inf, theta[1:]]])
+    got = sw.parameter_error(rows, theta)
+    assert got[:2] == pytest.approx([0.0, 0.1])
+    assert np.isnan(got[2]) and got[3] == np.inf
+
+
 def test_max_relative_error_hand_values():
     y = [1.0, -2.0, 4.0]
     yhat = [1.5, -2.0, 3.0]

@@ -17,6 +17,7 @@ from scipy.optimize import OptimizeResult
 from .._checks import (_real_array, check_reference, check_vector, warn,
                        ExcitationWarning, IdentificationWarning)
 from ..model._coefficients import signed_theta
+from ..tools.validation import scaled_norm
 from ._data import input_order_text
 
 __all__ = ['IdentificationResult', 'parameter_error']
@@ -222,6 +223,8 @@ def parameter_error(theta_hat, theta_true):
     Returns
     -------
     float or ndarray of shape (N,)
+        An estimate that is not finite (a diverged one) gives nan or inf;
+        one too far off for a float gives inf.
 
     Raises
     ------
@@ -246,8 +249,10 @@ def parameter_error(theta_hat, theta_true):
         raise ValueError(
             f"theta_hat has {theta_hat.shape[-1]} parameters per estimate "
             f"but theta_true has {theta_true.size}")
-    return (np.linalg.norm(theta_hat - theta_true, axis=-1)
-            / np.linalg.norm(theta_true))
+    with np.errstate(over='ignore'):
+        return (scaled_norm(theta_hat - theta_true)
+                / scaled_norm(theta_true))
+
 
 
 def backlash_significance(cost_linear, cost_sandwich, n_linear, n_sandwich,

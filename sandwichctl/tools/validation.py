@@ -34,8 +34,8 @@ import control as ct
 
 from ..model.sandwich import SandwichSystem
 from .experiments import as_experiments
-from .._checks import (DATA_RANGE, check_signal, check_int, check_axes,
-                       check_bool, check_data_scale, check_model_output,
+from .._checks import (check_signal, check_int, check_axes, check_bool,
+                       check_data_scale, check_model_output,
                        SimulationWarning)
 
 __all__ = ['fit_percent', 'nrmse', 'max_relative_error', 'compare',
@@ -82,18 +82,16 @@ def nrmse(y, yhat):
     for name, other, values in (('y', 'yhat', y), ('yhat', 'y', yhat)):
         check_data_scale(name, values, 'the error norms', low=False,
                          back=f"{other} alike (the fit does not change)")
-    # the norms of a tiny y are scaled by its peak, so that y of 1e-200
-    # does not underflow (the ratio is the same)
-    peak = float(np.max(np.abs(y)))
-    scale = peak if 0 < peak < DATA_RANGE[0] else 1.0
-    spread = np.linalg.norm((y - y.mean()) / scale)
+    # each norm in units of its own largest entry, so that neither a y
+    # of 1e-200 nor its error against a yhat of 1 underflows or overflows
+    spread = float(scaled_norm(y - y.mean()))
     if spread == 0:
         raise ValueError(
             f"y is constant (every sample is {float(y[0])!r}), so its "
             f"deviation from the mean is zero and the normalised error is "
             f"undefined; compare on data that excites the output")
     with np.errstate(over='ignore'):
-        return float(np.linalg.norm((y - yhat) / scale) / spread)
+        return float(scaled_norm(y - yhat) / spread)
 
 
 def fit_percent(y, yhat):
@@ -502,6 +500,17 @@ def compare(model, u, y=None, ax=None, initial_state=None, timepts=None,
         for r in results:
             r.ax = ax
     return results if many else results[0]
+
+
+def scaled_norm(x):
+    """The Euclidean norm along the last axis, in units of the largest
+    entry (no overflow or underflow of the squares at the float's ends):
+    inf where an entry is, nan where one is nan."""
+    top = np.max(np.abs(x), axis=-1)
+    with np.errstate(invalid='ignore', divide='ignore'):
+        unit = np.where(np.isfinite(top) & (top > 0), top, 1.0)
+        got = np.linalg.norm(x / unit[..., None], axis=-1) * unit
+    return np.where(np.isinf(top), np.inf, got)
 
 
 def _check_pair(y, yhat):
