@@ -254,7 +254,6 @@ def parameter_error(theta_hat, theta_true):
                 / scaled_norm(theta_true))
 
 
-
 def backlash_significance(cost_linear, cost_sandwich, n_linear, n_sandwich,
                           n_samples):
     """F-test of the sandwich against the linear model it nests.
