@@ -103,8 +103,10 @@ def lm(st, phi, u, y, max_iter=100, tol=1e-10, *, m_min=1e-9, sp=False,
 
 def _damped_step(st, phi, Jf, r, mu, *, cost, free, m_min, data):
     """The first admissible step that lowers the cost, the damping mu
-    growing tenfold from `mu` until it does (below 1e12): (trial, its
-    cost, mu), or (None, None, mu) if none does."""
+    growing tenfold from `mu` until it does (below 1e12, and while the
+    damped matrix is finite: a Jacobian near an unstable candidate can
+    have columns of 1e150): (trial, its cost, mu), or (None, None, mu) if
+    none does."""
     u, y, sp = data
     A = Jf.T @ Jf
     g = Jf.T @ r
@@ -114,7 +116,11 @@ def _damped_step(st, phi, Jf, r, mu, *, cost, free, m_min, data):
     lo, hi = st.bounds(phi, m_min)
     lo, hi = lo[free], hi[free]
     while mu < 1e12:
-        d = _step(A + mu * np.diag(scale), g, lo, hi)
+        with np.errstate(over='ignore'):
+            damped = A + mu * np.diag(scale)
+        if not np.all(np.isfinite(damped)):
+            break                   # a larger mu overflows too
+        d = _step(damped, g, lo, hi)
         if d is None:
             mu *= 10
             continue
