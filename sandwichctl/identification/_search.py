@@ -26,6 +26,8 @@ from scipy.signal import lfilter
 
 from ._data import leading
 from ._held_out import step13_held_out
+from ._integrators import (drift, integrator_floor, integrator_split,
+                           integrator_splits, slow_pole, split_label)
 from ._lm import lm
 from ._linear import fit_oe, fit_output, fit_blocks, wants_integrator
 from ._predictor import oe_signals
@@ -65,7 +67,7 @@ def search(task, linears=None):
     scaled = step1_units(task)
     if linears is None:
         linears = step2_linear_baseline(task, scaled)
-    return step13_held_out(task, *step3_integrators(task, linears))
+    return step13_held_out(task, *step3_integrators(task, linears, scaled))
 
 
 class Task:
@@ -112,37 +114,6 @@ class Task:
                       offsets=self.offsets, start=start, **kw)
 
 
-def integrator_split(k, orders, block):
-    """(i1, i2): k integrators in `block` ('L1', 'L2', or 'auto' as L1)
-    first, the rest in the other block."""
-    na, nc = orders['na'], orders['nc']
-    first = nc if block == 'L2' else na
-    if k > na + nc:
-        raise ValueError(f"integrators = {k} exceed the na + nc = "
-                         f"{na + nc} poles of the structure")
-    i_first = min(k, first)
-    i_second = k - i_first
-    return (i_second, i_first) if block == 'L2' else (i_first, i_second)
-
-
-def integrator_splits(k, orders, block):
-    """The (i1, i2) the search tries for k integrators: the one of
-    `integrator_split` for a `block` 'L1' or 'L2'; for 'auto' every way
-    of placing them in blocks with poles enough (na for L1, nc for L2),
-    L1's fullest first."""
-    if block != 'auto' or k == 0:
-        return [integrator_split(k, orders, block)]
-    na, nc = orders['na'], orders['nc']
-    return [(i1, k - i1) for i1 in range(min(k, na), -1, -1)
-            if k - i1 <= nc]
-
-
-def split_label(split):
-    """'1 in L1', '1 in L2', '1 in L1 + 1 in L2' or '0' for (i1, i2)."""
-    parts = [f"{i} in {blk}" for i, blk in zip(split, ('L1', 'L2')) if i]
-    return ' + '.join(parts) or '0'
-
-
 def step1_units(task):
     """Step 1: u and y scaled (and rounded), the sign taken out."""
     return Problem(task.u, task.y, task.orders, dt=task.dt, name=task.name)
@@ -175,20 +146,21 @@ def linear_baseline(task):
     return Search(task, lin, split).baseline()
 
 
-def step3_integrators(task, linears):
-    """Step 3: the search (steps 4 to 12) from each linear fit, with an
+def step3_integrators(task, linears, scaled):
+    """Step 3: the search (steps 4 to 12) from each linear fit (and from
+    the one with an integrator, fitted on `scaled`, where the sandwich
+    without one asks for it: `_searched`), with an
     integrator in each block `integrator_splits` allows ('auto': L1 and
     L2); without an integrator restarted from the cheapest fit with one if
     that ended cheaper; the lower AIC, above the integrator-free floor.
     An integrating fit whose pole at z = 1 a zero of the model cancels
-    (`_drift`) is not chosen over the integrator-free one. Returns
+    (`drift`) is not chosen over the integrator-free one. Returns
     (problem, best, linear baseline, the `Search` it came from)."""
     block = task.opt.integrator_block
     searches = {split: Search(task, lin, split)
                 for k, lin in linears.items()
                 for split in integrator_splits(k, task.orders, block)}
-    with shared_progress(task, len(searches), 'identify: starts'):
-        fits = _run_all(searches, task.workers)
+    fits = _searched(task, searches, linears, scaled)
     free = (0, 0)
     if free in fits and len(fits) > 1:
         cheapest = min((s for s in fits if s != free),
@@ -203,10 +175,10 @@ def step3_integrators(task, linears):
         prob, out, _ = fits[split]
         return n * np.log(max(out["cost"], 1e-300)) + 2 * prob.st.size
 
-    drifts = {split: _drift(fits[split]) for split in fits if sum(split)}
+    drifts = {split: drift(fits[split]) for split in fits if sum(split)}
     real = [split for split in fits if drifts.get(split) is None]
     chosen = min(real if free in fits else fits, key=aic)
-    floor = _integrator_floor(fits, chosen)
+    floor = integrator_floor(fits, chosen)
     prob, best, linear = fits[floor]
     if len(fits) > 1:
         label = split_label if block == 'auto' else sum
@@ -233,6 +205,26 @@ def step3_integrators(task, linears):
     return prob, best, linear, searches[floor]
 
 
+def _searched(task, searches, linears, scaled):
+    """The fits of `searches` ({split: (problem, best, linear)}); with
+    integrators='auto' where the linear fit has no slow real pole to try
+    an integrator for (a fit the backlash dominates), but the sandwich
+    without one ends with one in L1 or L2 (`wants_integrator`), those
+    with one too (`searches` and `linears` gain them)."""
+    with shared_progress(task, len(searches), 'identify: starts'):
+        fits = _run_all(searches, task.workers)
+    if task.opt.integrators != 'auto' or 1 in linears or (0, 0) not in fits:
+        return fits
+    if not slow_pole(fits[0, 0]):
+        return fits
+    linears[1] = task.fit_linear(scaled, 1)
+    more = {split: Search(task, linears[1], split) for split in
+            integrator_splits(1, task.orders, task.opt.integrator_block)}
+    searches.update(more)
+    with shared_progress(task, len(more), 'identify: starts'):
+        return {**fits, **_run_all(more, task.workers)}
+
+
 def _run_all(searches, workers):
     """{split: run} of `searches` on `workers` threads, an L2 integrator's
     first (step 5 filters its search): the same fits as on one thread."""
@@ -240,35 +232,6 @@ def _run_all(searches, workers):
     got = dict(zip(order, ordered_map(lambda split: searches[split].run(),
                                       order, workers)))
     return {split: got[split] for split in searches}
-
-
-#: a zero of the model this close to z = 1 cancels its integrator: the
-#: fit carries a drift term, and is no evidence for an integrator
-DRIFT_ZERO = 1e-4
-
-
-def _drift(fit):
-    """The zero of an integrating fit (problem, best, linear) that cancels
-    its pole at z = 1 (within `DRIFT_ZERO`), or None."""
-    prob, out, _ = fit
-    with np.errstate(all='ignore'):
-        model = prob.model(out['phi'])
-        zeros = np.r_[model.L1.zeros(), model.L2.zeros()]
-    near = zeros[np.abs(zeros - 1) < DRIFT_ZERO]
-    return float(np.real(near[0])) if near.size else None
-
-
-def _integrator_floor(fits, chosen):
-    """The never-worse-than-linear floor across the integrator decision:
-    an integrating sandwich `chosen` (an (i1, i2) of `fits`, in either
-    block) is kept only if it is cheaper than the integrator-free linear
-    fit it must beat (a search without an integrator that diverged or
-    stalled is no evidence for one)."""
-    free = (0, 0)
-    if sum(chosen) and free in fits and not fits[chosen][1]['cost'] < \
-            fits[free][2].get('held', fits[free][2])['cost_scaled']:
-        return free
-    return chosen
 
 
 def _unintegrated(task, free, integrating):
