@@ -267,8 +267,7 @@ def test_an_integrator_must_beat_the_integrator_free_linear_fit():
         assert integrator_floor(fits(4.0, 3.0, one), one) == (0, 0)
         assert integrator_floor(fits(4.0, 3.0, one), (0, 0)) == (0, 0)
         assert integrator_floor({one: (None, {'cost': 9.0}, {})},
-                                 one) == one
-
+                                one) == one
 
 
 def test_a_slow_pole_of_the_sandwich_asks_for_an_integrator(monkeypatch):

@@ -76,8 +76,6 @@ def test_constant_y_is_rejected(func):
         func([2.0, 2.0, 2.0], [1.0, 2.0, 3.0])
 
 
-# --- max_relative_error --------------------------------------------------
-
 def test_norms_at_the_ends_of_the_float_range_stay_finite():
     # each norm is taken in units of its own largest entry: a y of 1e-300
     # against a yhat of 1 squared its error to inf, and a theta of 1e200
@@ -103,6 +101,8 @@ def test_norms_at_the_ends_of_the_float_range_stay_finite():
     assert got[:2] == pytest.approx([0.0, 0.1])
     assert np.isnan(got[2]) and got[3] == np.inf
 
+
+# --- max_relative_error --------------------------------------------------
 
 def test_max_relative_error_hand_values():
     y = [1.0, -2.0, 4.0]

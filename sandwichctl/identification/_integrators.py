@@ -48,9 +48,8 @@ DRIFT_ZERO = 1e-4
 def drift(fit):
     """The zero of an integrating fit (problem, best, linear) that cancels
     its pole at z = 1 (within `DRIFT_ZERO`), or None."""
-    prob, out, _ = fit
+    model = _model(fit)
     with np.errstate(all='ignore'):
-        model = prob.model(out['phi'])
         zeros = np.r_[model.L1.zeros(), model.L2.zeros()]
     near = zeros[np.abs(zeros - 1) < DRIFT_ZERO]
     return float(np.real(near[0])) if near.size else None
@@ -74,8 +73,13 @@ def slow_pole(fit):
     integrator has a real pole above 0.9 in L1 or L2 (`wants_integrator`):
     a reason to try one where the linear fit, which the backlash may
     dominate, gave none."""
-    prob, out, _ = fit
-    with np.errstate(all='ignore'):
-        model = prob.model(out['phi'])
+    model = _model(fit)
     return any(wants_integrator(block.den[0][0])
                for block in (model.L1, model.L2))
+
+
+def _model(fit):
+    """The sandwich of a fit (problem, best, linear)."""
+    prob, out, _ = fit
+    with np.errstate(all='ignore'):
+        return prob.model(out['phi'])

@@ -209,16 +209,16 @@ def _searched(task, searches, linears, scaled):
     """The fits of `searches` ({split: (problem, best, linear)}); with
     integrators='auto' where the linear fit has no slow real pole to try
     an integrator for (a fit the backlash dominates), but the sandwich
-    without one ends with one in L1 or L2 (`wants_integrator`), those
-    with one too (`searches` and `linears` gain them)."""
+    without one ends with one in L1 or L2 (`slow_pole`), those with one
+    too, from the linear fit with one on `scaled` (`searches` gains
+    them)."""
     with shared_progress(task, len(searches), 'identify: starts'):
         fits = _run_all(searches, task.workers)
-    if task.opt.integrators != 'auto' or 1 in linears or (0, 0) not in fits:
+    if task.opt.integrators != 'auto' or 1 in linears or \
+            (0, 0) not in fits or not slow_pole(fits[0, 0]):
         return fits
-    if not slow_pole(fits[0, 0]):
-        return fits
-    linears[1] = task.fit_linear(scaled, 1)
-    more = {split: Search(task, linears[1], split) for split in
+    lin = task.fit_linear(scaled, 1)
+    more = {split: Search(task, lin, split) for split in
             integrator_splits(1, task.orders, task.opt.integrator_block)}
     searches.update(more)
     with shared_progress(task, len(more), 'identify: starts'):
