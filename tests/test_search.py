@@ -276,8 +276,9 @@ def test_a_slow_pole_of_the_sandwich_asks_for_an_integrator(monkeypatch):
     (held-out family 8's 1003681530, shortened: the linear fit explains
     11 % of y, with no such pole) it did not, and returned a success at
     a fit of 33 %; the sandwich without an integrator ends with a pole at
-    0.99, which now asks for the integrating searches too (`slow_pole`),
-    and from them the search ends at 38 % (the true plant: 58 %)."""
+    0.99, which now asks for the integrating searches too (`slow_pole`,
+    in `worth_integrating`), and from them the search ends at 38 % (the
+    true plant: 58 %)."""
     from sandwichctl.identification import _search
     case = sw.data.random_case(1003681530, snr=5.0, n=1000,
                                input_kind='square+sine', integrating=True)
@@ -289,10 +290,33 @@ def test_a_slow_pole_of_the_sandwich_asks_for_an_integrator(monkeypatch):
     res = run()
     assert "by AIC of the sandwich fits (0: " in res.message
     assert "1 in L1" in res.message and "1 in L2" in res.message
-    monkeypatch.setattr(_search, 'slow_pole', lambda fit: False)
+    monkeypatch.setattr(_search, 'worth_integrating',
+                        lambda fit, flat=True: False)
     before = run()
     assert "by AIC" not in before.message
     assert res.fit > before.fit + 2.0
+
+
+def test_poorly_determined_parameters_ask_for_the_integrating_searches(
+        monkeypatch):
+    """Without a slow pole, a fit whose data leave a parameter poorly
+    determined (the verdict's test, `Problem.poorly_determined`) is worth
+    the integrating searches too, and one that is well determined not;
+    on a long record's leading samples (``flat=False``) neither is."""
+    from sandwichctl.identification import _integrators
+    monkeypatch.setattr(_integrators, 'slow_pole', lambda fit: False)
+
+    class Prob:
+        def __init__(self, poor):
+            self.poor = poor
+
+        def poorly_determined(self, out):
+            return self.poor
+    assert _integrators.worth_integrating((Prob(True), {}, {}))
+    assert not _integrators.worth_integrating((Prob(False), {}, {}))
+    # the leading samples of a long record: the slow pole alone counts
+    assert not _integrators.worth_integrating((Prob(True), {}, {}),
+                                              flat=False)
 
 
 def _linear_data(seed, n=3000):

@@ -78,6 +78,23 @@ def slow_pole(fit):
                for block in (model.L1, model.L2))
 
 
+def worth_integrating(fit, flat=True):
+    """Whether integrators='auto' runs the integrating searches after the
+    sandwich fit (problem, best, linear) without an integrator, where the
+    linear fit gave no reason to: a slow real pole (`slow_pole`), or a
+    parameter the data leave poorly determined. A flat cost has other
+    basins, and a search with an integrator reaches some: the fit without
+    one restarts from it when it ends cheaper (`_search._unintegrated`).
+    On held-out families 6 and 8 that fixed four local optima, one at
+    2.63 times the optimum's cost, for about half as much time again
+    (the benchmarks page). `flat`: whether poorly determined parameters
+    count (not on the leading samples of a long record, where they cost
+    3 to 5 times the path's time and changed no model of the
+    benchmark)."""
+    prob, out, _ = fit
+    return slow_pole(fit) or (flat and prob.poorly_determined(out))
+
+
 def _model(fit):
     """The sandwich of a fit (problem, best, linear)."""
     prob, out, _ = fit

@@ -88,7 +88,7 @@ def long_search(task):
     head = Task(leading(task.u, LONG_HEAD), leading(task.y, LONG_HEAD),
                 task.orders, task.opt, dt=task.dt, name=task.name,
                 progress=task.progress, offsets=task.offsets,
-                workers=workers, path_samples=PATH_SAMPLES)
+                workers=workers, path_samples=PATH_SAMPLES, head=True)
     if not all(np.ptp(part) > 0 for part in head.u + head.y):
         return search(task)       # a constant start: it cannot find a basin
     scaled_h, scaled = step1_units(head), step1_units(task)

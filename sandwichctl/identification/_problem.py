@@ -26,7 +26,8 @@ from ._data import scale as _scale, scaled
 from ._predictor import (simulate_with_sensitivities, oe_output, sp_output,
                          smooth_output, is_stable, init_sizes, oe_signals)
 from .result import (IdentificationResult, backlash_significance,
-                     whiteness, verdict, judge, MIN_FIT)
+                     whiteness, verdict, judge, poorly_determined,
+                     MIN_FIT)
 from ..model.sandwich import SandwichSystem
 
 __all__ = []
@@ -445,6 +446,13 @@ class Problem:
             fit = 100 * (1 - np.linalg.norm(r) / denom) if denom > 0 \
                 else -np.inf
         return r, cost, fit
+
+    def poorly_determined(self, out):
+        """Whether the data leave a parameter of the `lm` output `out`
+        poorly determined (`result.poorly_determined`), as the verdict
+        of its result would say."""
+        theta = self.st.theta(out['phi']) * self.unit
+        return bool(np.any(poorly_determined(self._std(out, theta), theta)))
 
     def _std(self, out, theta):
         """Standard errors of theta, sigma^2 (J'J)^-1 mapped through the

@@ -27,7 +27,8 @@ from scipy.signal import lfilter
 from ._data import leading
 from ._held_out import step13_held_out
 from ._integrators import (drift, integrator_floor, integrator_split,
-                           integrator_splits, slow_pole, split_label)
+                           integrator_splits, split_label,
+                           worth_integrating)
 from ._lm import lm
 from ._linear import fit_oe, fit_output, fit_blocks, wants_integrator
 from ._predictor import oe_signals
@@ -82,6 +83,7 @@ class Task:
         self.offsets = kw.get('offsets', False)
         self.workers = kw.get('workers', 1)     # threads of `ordered_map`
         self.path_samples = kw.get('path_samples')  # of step 8's path
+        self.head = kw.get('head', False)   # a long record's leading part
         self.inits = opt.initial_state == 'estimate'
         o = orders
         self.shape = (o['nb'] + o['nd'] + 1, o['na'] + o['nc'],
@@ -209,13 +211,14 @@ def _searched(task, searches, linears, scaled):
     """The fits of `searches` ({split: (problem, best, linear)}); with
     integrators='auto' where the linear fit has no slow real pole to try
     an integrator for (a fit the backlash dominates), but the sandwich
-    without one ends with one in L1 or L2 (`slow_pole`), those with one
-    too, from the linear fit with one on `scaled` (`searches` gains
-    them)."""
+    without one ends with one in L1 or L2 or with poorly determined
+    parameters (`worth_integrating`), those with one too, from the linear
+    fit with one on `scaled` (`searches` gains them)."""
     with shared_progress(task, len(searches), 'identify: starts'):
         fits = _run_all(searches, task.workers)
     if task.opt.integrators != 'auto' or 1 in linears or \
-            (0, 0) not in fits or not slow_pole(fits[0, 0]):
+            (0, 0) not in fits or \
+            not worth_integrating(fits[0, 0], flat=not task.head):
         return fits
     lin = task.fit_linear(scaled, 1)
     more = {split: Search(task, lin, split) for split in

@@ -142,8 +142,7 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
     if input_order is not None and input_order[0] < input_order[1]:
         fail('input_order', input_order_text(*input_order))
     if std is not None:
-        ill = ~np.isfinite(std) | (std > POORLY_DETERMINED * np.maximum(
-            np.abs(theta), 1e-3))
+        ill = poorly_determined(std, theta)
         if np.any(ill):
             fail('std', [n for n, bad in zip(labels, ill) if bad], False)
     if excitation is not None and excitation < MIN_EXCITATION:
@@ -182,6 +181,14 @@ def _held(linear):
     holds it."""
     held = linear.get('held')
     return "; " + held['note'] if held else ""
+
+
+def poorly_determined(std, theta):
+    """Which parameters of theta the standard errors `std` leave poorly
+    determined: a standard error that is not finite or above
+    `POORLY_DETERMINED` of |theta| (at least 1e-3)."""
+    return ~np.isfinite(std) | (std > POORLY_DETERMINED * np.maximum(
+        np.abs(theta), 1e-3))
 
 
 def judge(res, failed):
