@@ -320,7 +320,7 @@ def test_poorly_determined_parameters_ask_for_the_integrating_searches(
 
 
 def test_poorly_determined_parameters_lead_out_of_a_poor_basin():
-    """A random plant (seed 858356393, SNR 20, lowpass input) on which
+    """A random plant (seed 858356393, SNR 20, multisine input) on which
     the sandwich without an integrator ended at a fit of 57.4 % with its
     parameters poorly determined and ``success=True``, where the true
     plant fits 78.0 %: the integrating searches it now asks for end

@@ -85,7 +85,7 @@ def worth_integrating(fit, flat=True):
     parameter the data leave poorly determined. A flat cost has other
     basins, and a search with an integrator reaches some: the fit without
     one restarts from it when it ends cheaper (`_search._unintegrated`).
-    On held-out families 6 and 8 that fixed four local optima, one at
+    On robustness families 6 and 8 that fixed four local optima, one at
     2.63 times the optimum's cost, for about half as much time again
     (the benchmarks page). `flat`: whether poorly determined parameters
     count (not on the leading samples of a long record, where they cost
