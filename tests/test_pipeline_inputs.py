@@ -7,6 +7,7 @@ documented limits."""
 import warnings
 
 import numpy as np
+import control as ct
 import pytest
 
 import sandwichctl as sw
@@ -46,6 +47,53 @@ def test_a_model_that_fits_exactly_is_not_worse_than_linear(u, y, orders):
         res = sw.identify(u, y, **orders)
     assert res.fit > 99.999999 and res.linear['fit'] > 99.999999
     assert res.success, res.message
+
+
+def test_a_structure_without_poles_tries_no_integrator():
+    # integrators='auto' fitted a linear model with one: numpy's
+    # "negative dimensions" from a structure with nowhere to put it
+    u = U[:600]
+    y = PLANT.simulate(u).outputs
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', sw.IdentificationWarning)
+        res = sw.identify(u, y, na=0, nb=1, nc=0, nd=1)
+    assert res.integrators == {'L1': 0, 'L2': 0}
+    assert np.isfinite(res.fit) and res.fit > 0
+    with pytest.raises(ValueError, match='exceed the na . nc = 0 poles'):
+        sw.identify(u, y, na=0, nb=1, nc=0, nd=1, integrators=1)
+
+
+@pytest.mark.parametrize('at', [0, 3])
+def test_an_impulse_from_rest_determines_a_linear_plant(at):
+    # told "the input starts 24.5 of its standard deviations from zero"
+    # and "a recurrence of 0 taps (as nothing does)": the impulse lay
+    # before the first sample the recurrence test looked at
+    G = ct.tf([0.5, 0.2], [1, -1.1, 0.3], 1)
+    u = np.zeros(600)
+    u[at] = 1.0
+    res = sw.identify_linear(u, ct.forced_response(G, U=u).outputs, nb=2,
+                             nf=2)
+    assert res.success, res.message
+    assert res.fit > 99.9999
+    # at an operating point it is still told
+    u = u + 5.0
+    res = sw.identify_linear(u, ct.forced_response(G, U=u).outputs, nb=2,
+                             nf=2)
+    assert not res.success
+    assert 'standard deviations from zero' in res.message
+
+
+def test_an_impulse_through_a_sandwich_does_not_determine_it():
+    # it moves the backlash in four samples: a model that fits it exactly
+    # but validates at 77 % was a success
+    u = np.r_[1.0, np.zeros(599)]
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', sw.SandwichWarning)
+        res = sw.identify(u, PLANT.simulate(u).outputs, **O)
+    assert res.fit > 99.99
+    assert not res.success
+    assert "backlash moves in only 4 samples" in res.message
+    assert "the 6 parameters of L1 and the backlash" in res.message
 
 
 def test_bundle_qp_failures_are_told_once():

@@ -85,12 +85,24 @@ def with_shift(info, estimated):
                                                         estimated)])
 
 
+#: A record starts at an operating point when both its first sample and
+#: the median of this many leading samples are far from zero: an
+#: operating point holds for a while, an impulse at the first sample does
+#: not, and a step a few samples in starts from rest.
+START_SAMPLES = 10
+
+
 def input_offset(us):
-    """The largest |first sample| / standard deviation of the input
-    experiments: how far from u = 0, where the model starts at rest, a
-    record starts (see `result.INPUT_OFFSET`)."""
-    return max((abs(float(part[0])) / float(np.std(part))
-                for part in us if np.std(part) > 0), default=0.0)
+    """The largest starting level / standard deviation of the input
+    experiments, the level the smaller of |first sample| and |the median
+    of the first `START_SAMPLES`|: how far from u = 0, where the model
+    starts at rest, a record starts (see `result.INPUT_OFFSET`). An
+    impulse at the start (one sample at 24 standard deviations in 600)
+    is an experiment from rest, not an operating point."""
+    return max((min(abs(float(part[0])),
+                    abs(float(np.median(part[:START_SAMPLES]))))
+                / float(np.std(part)) for part in us if np.std(part) > 0),
+               default=0.0)
 
 
 def scale(x):
@@ -194,7 +206,9 @@ def excitation_order(us, n):
     2 s, a sinusoid about a constant three; steps, noise and broadband
     records none of fewer than n (a sinusoid switched on from rest in the
     record counts as a step does: its switch is a transient that tells
-    L1, as a step's edge does). A block of n coefficients is
+    L1, as a step's edge does; so does an impulse or a pulse within the
+    first n samples of a record that rests after it, whose response is
+    the plant's free one). A block of n coefficients is
     determined by the data only where it is n (the input is
     "persistently exciting of order n")."""
     got = _recurrence(us, n, RECURRENCE_SAMPLES)
@@ -211,6 +225,10 @@ def _recurrence(us, n, samples):
         part = np.asarray(part, float)[:samples]
         if part.size <= n:
             continue
+        if not np.any(part[n:]) and np.any(part[:n]):
+            # an impulse or a pulse within the first n samples, then rest:
+            # from rest (the model's own start) its edges are the targets
+            part = np.r_[np.zeros(n), part]
         top = float(np.max(np.abs(part)))
         part = part / top if top > 0 else part      # any units
         # what rounding to the experiment's grid leaves in each sample

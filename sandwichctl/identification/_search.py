@@ -213,11 +213,12 @@ def _searched(task, searches, linears, scaled):
     an integrator for (a fit the backlash dominates), but the sandwich
     without one ends with one in L1 or L2 or with poorly determined
     parameters (`worth_integrating`), those with one too, from the linear
-    fit with one on `scaled` (`searches` gains them)."""
+    fit with one on `scaled` (`searches` gains them). A structure
+    without poles (na = nc = 0) has no place for one."""
     with shared_progress(task, len(searches), 'identify: starts'):
         fits = _run_all(searches, task.workers)
     if task.opt.integrators != 'auto' or 1 in linears or \
-            (0, 0) not in fits or \
+            (0, 0) not in fits or task.shape[1] < 1 or \
             not worth_integrating(fits[0, 0], flat=not task.head):
         return fits
     lin = task.fit_linear(scaled, 1)

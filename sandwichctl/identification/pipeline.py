@@ -295,8 +295,11 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     result.offsets = with_shift(offset_info, estimated)
     moving = _excitation(result.model, us)
     result.excitation = np.nan if moving is None else moving
+    got, need, _ = order = _input_order(result, us, orders)
+    moves = None if moving is None else (
+        int(round(moving * sum(np.size(u) for u in us))), need + 3)
     judge(result, verdict(excitation=moving, input_offset=input_offset(us),
-                          input_order=_input_order(result, us, orders)))
+                          input_order=order, backlash_moves=moves))
     _warn_mean_integrating(result, offsets)
     return result
 

@@ -56,7 +56,7 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
             zeros_at_bound=(), zero_radius=None, fit=None, min_fit=MIN_FIT,
             linear=None, cost_scaled=None, method='oe', std=None, theta=None,
             labels=(), excitation=None, minimum_phase_bound=None,
-            input_offset=None, input_order=None):
+            input_offset=None, input_order=None, backlash_moves=None):
     """The checks an identified model fails, in the order they are told.
 
     Every argument is one fact about the model; a fact left at None is
@@ -99,6 +99,12 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
         (`_data.excitation_order`: the taps of the shortest recurrence it
         satisfies) where the block `what` has `need`; fewer than need do
         not determine them.
+    backlash_moves : tuple
+        (count, need): the model's backlash is outside its memory zone in
+        `count` samples, and only those tell the `need` parameters of L1
+        and the backlash (m1, m2, D1, D2 and L1's free coefficients);
+        fewer do not determine them, however well the model fits (an
+        impulse through a sandwich: three samples).
 
     Returns
     -------
@@ -145,7 +151,14 @@ def verdict(*, finite=None, stable=None, estimate=None, converged=None,
         ill = poorly_determined(std, theta)
         if np.any(ill):
             fail('std', [n for n, bad in zip(labels, ill) if bad], False)
-    if excitation is not None and excitation < MIN_EXCITATION:
+    if backlash_moves is not None and backlash_moves[0] < backlash_moves[1]:
+        fail('backlash_moves', f"the model's backlash moves in only "
+                               f"{backlash_moves[0]} samples, and only they "
+                               f"tell the {backlash_moves[1]} parameters of "
+                               f"L1 and the backlash: the data do not "
+                               f"determine them (excite the plant longer, "
+                               f"across the dead band)")
+    elif excitation is not None and excitation < MIN_EXCITATION:
         fail('excitation', excitation, False)
     if minimum_phase_bound is not None:
         fail('minimum_phase', f"a zero of L1 ended on the minimum-phase "
