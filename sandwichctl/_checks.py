@@ -653,8 +653,8 @@ def common_dt(name1, dt1, name2, dt2):
 
 
 def _as_real_scalar(name, value):
-    if isinstance(value, (bool, np.bool_)) or not isinstance(
-            value, (numbers.Real, np.floating, np.integer)):
+    if isinstance(value, (bool, np.bool_, np.timedelta64)) or \
+            not isinstance(value, (numbers.Real, np.floating, np.integer)):
         if np.ma.is_masked(value):     # np.ma.masked read as its 0.0
             raise ValueError(f"{name} is masked (np.ma.masked), a value "
                              f"that is missing; give a number")

@@ -423,6 +423,7 @@ def test_a_program_uses_the_header_alone(tmp_path):
     (dict(name='double'), ValueError, 'C keyword'),
     (dict(name=3), TypeError, 'name'),
     (dict(name='math'), ValueError, 'shadows the standard header'),
+    (dict(name='Math'), ValueError, 'shadows the standard header <math'),
     (dict(dtype='float64'), ValueError, "dtype must be 'double' or 'float'"),
     (dict(directory=3.5), TypeError, 'directory'),
 ])

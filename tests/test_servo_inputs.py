@@ -269,3 +269,65 @@ def test_a_long_preview_of_far_zeros_designs_without_scipys_warning():
         warnings.simplefilter('error')
         ctrl = sw.servo_controller(P, max_preview=1000)
     assert ctrl.preview > 20 and ctrl.margins['pole_radius'] < 1
+
+
+@pytest.mark.parametrize('m2, D, noted, warned', [
+    (1.2, 0.01, True, False),        # at 5.5 bands, as the paper plant's
+    (1.2, 0.0, True, True),          # no band: they cross at zero
+    (1.01, 0.01, False, False),      # at 100 bands
+    (1.0, 0.01, False, False)])
+def test_slope_lines_that_cross_near_zero_are_told(m2, D, noted, warned):
+    # beyond the crossing no inverse reaches the outputs between the lines:
+    # the exact inverse of a known model tracked there to within their gap
+    # (22 % of a unit step for these slopes) without a word
+    P = sw.SandwichSystem.from_coefficients(
+        a=[0.1, 0.2], b=[1.5], c=[1.2, 0.32], d=[2, -0.1], m1=1, m2=m2,
+        D1=D, D2=D, dt=1)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter('always')
+        ctrl = sw.servo_controller(P, band_fraction=1.0)
+    told = [w for w in caught if 'slope lines cross' in str(w.message)]
+    assert len(told) == warned
+    notes = [n for n in ctrl.notes if 'slope lines cross' in n]
+    assert len(notes) == noted
+    if noted:
+        x = P.backlash.crossing + 0.0
+        assert f"x = {x:.4g} (backlash output v = " in notes[0]
+        assert all(issubclass(w.category, sw.SandwichWarning) for w in told)
+
+
+def test_a_timedelta_is_no_number_and_the_error_names_the_argument():
+    # numpy's timedelta64 is an integer type: float() of it failed with
+    # "float() argument must be ... not 'datetime.timedelta'"
+    ctrl = sw.servo_controller(P)
+    with pytest.raises(TypeError, match='y must be a real number'):
+        ctrl.step(0.0, np.timedelta64(1, 's'))
+    with pytest.raises(TypeError, match='modulus_margin must be a real'):
+        sw.servo_controller(P, modulus_margin=np.timedelta64(1))
+
+
+def test_the_repr_of_a_design_without_a_sample_time_says_so():
+    ctrl = sw.servo_controller(ct.tf([0.5, 0.2], [1, -1.1, 0.3], True))
+    assert ctrl.dt is True and 'dt=True,' in repr(ctrl)
+    assert 'dt=1,' in repr(sw.servo_controller(P))
+
+
+@pytest.mark.parametrize('share', [None, 0.0, 0.5, 1.0])
+def test_a_pd_around_a_play_before_an_integrator_tells_its_dead_zone(share):
+    # the default quarter of a large band left holds 3 from the reference
+    # on the model itself, and nothing said why
+    P = sw.SandwichSystem.from_coefficients(
+        a=[0.1, 0.2], b=[1.5], c=[-1.0], d=[2, -0.1], m1=1, m2=1.2, D1=0.5,
+        D2=0.6, dt=1)
+    kw = {} if share is None else dict(band_fraction=share)
+    ctrl = sw.servo_controller(P, **kw)
+    assert ctrl.ki == 0
+    r = np.r_[np.zeros(20), np.ones(300), -np.ones(300), np.zeros(300)]
+    y = sw.closed_loop_response(P, r, ctrl).outputs[0]
+    stuck = max(abs(y[k] - r[k]) for k in (319, 619, 919))
+    note, = [n for n in ctrl.notes if n.startswith('backlash inverse')]
+    if ctrl.band_fraction == 1.0:
+        assert 'may stop' not in note and stuck < 1e-9
+    else:
+        bound = float(note.split('may stop up to ')[1].split()[0])
+        assert 0.3 * bound < stuck <= bound

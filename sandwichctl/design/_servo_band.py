@@ -7,6 +7,13 @@ import numpy as np
 import control as ct
 
 from ._servo_design import at_one, low_frequency_gain, preview_inverse
+from .._checks import warn
+
+#: the exact inverse of a known model notes where its slope lines cross
+#: within this many bands of backlash output from zero (the travel of the
+#: design's own reference, `design_reference(model, 20, dt)`), and warns
+#: where they cross within one band (m1 != m2 with no band: at zero)
+CROSSING_BANDS = 20.0
 
 __all__ = []
 
@@ -55,3 +62,34 @@ def jump_samples(L1_num, L1_den, band_x, dt, cap=2.0, longest=50):
         if peak <= cap * hold:
             return n
     return longest
+
+
+def crossing_note(model, notes):
+    """Where a known model's slope lines cross (m1 != m2, see
+    `Backlash.crossing`) within `CROSSING_BANDS` bands of backlash output
+    from zero: a note; within one band, a warning too. Beyond the
+    crossing eq. (2.2) has no band, and a rising x jumps v up to the
+    rising line (a falling one down to the falling line): the outputs
+    between the lines cannot be reached, so the exact inverse holds x
+    there and the loop tracks such a reference only to within the lines'
+    gap."""
+    co = model.coefficients
+    x = model.backlash.crossing
+    if x is None:
+        return
+    x, v = x + 0.0, co['m1'] * (x - co['D1']) + 0.0    # no -0
+    band = 0.5 * (co['m1'] + co['m2']) * (co['D1'] + co['D2'])
+    if abs(v) > CROSSING_BANDS * band:
+        return
+    n, d, integrating = low_frequency_gain(*(np.asarray(
+        a, dtype=float) for a in (model.L2.num[0][0], model.L2.den[0][0])))
+    at_y = (f", y = {v * n / d:.4g} at rest" if not integrating else "")
+    text = (f"the backlash's slope lines cross at x = {x:.4g} (backlash "
+            f"output v = {v:.4g}{at_y}; m1 = {co['m1']:.4g}, m2 = "
+            f"{co['m2']:.4g}): beyond it a reversal of x jumps v between "
+            f"the lines, so no inverse reaches the outputs between them, "
+            f"and the loop tracks there only to within their gap")
+    notes.append(text)
+    if abs(v) <= band:
+        warn(f"servo_controller: {text}; give the model m1 = m2 if it is "
+             f"meant to hold there")

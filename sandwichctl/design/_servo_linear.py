@@ -319,22 +319,53 @@ def cancel_drift(model, notes):
     return model
 
 
-def band_note(share, band, integrating, asked, jump, lead):
+def band_note(model, share, asked, jump, lead, gains):
     """The design note on the backlash inverse: `share` of the model's
-    `band` (D1 + D2, in x), `asked` by the user or the default, its jump
-    spread over `jump` samples and started `lead` early."""
+    band (D1 + D2, in x), `asked` by the user or the default, its jump
+    spread over `jump` samples and started `lead` early; with L2
+    integrating and the feedback's `gains` (kp, ki) a PD, how far from
+    the reference a hold may stop (`hold_error`)."""
+    co = model.coefficients
+    band = co['D1'] + co['D2']
     if not band > 0:
         return ("no backlash inverse: the identified backlash is closed "
                 "(D1 + D2 = 0 in x), so there is no band to compensate")
-    return (f"backlash inverse on the reference: {share:.0%} of the "
+    text = (f"backlash inverse on the reference: {share:.0%} of the "
             f"model's band (D1 + D2 = {band:.4g} in x) "
             + ("as asked" if asked else
-               "by default" + (" for an integrating L1" if integrating
-                               else "")
+               "by default" + (" for an integrating L1"
+                               if integrates(model.L1) else "")
                + ", since the play a loop sees is smaller than the gap (the "
                "load coasts into it) and more over-compensated on the "
                "benchmark drives")
             + f"; jump spread over {jump} samples, started {lead} early")
+    error = hold_error(model, share, *gains)
+    if error:
+        text += (f"; L2 integrates and the feedback is a PD (integral "
+                 f"action would hunt around the play before the "
+                 f"integrator), so a hold may stop up to {error:.3g} in y "
+                 f"from the reference, where the PD must push x across "
+                 f"the {1 - share:.0%} of the band left uncompensated "
+                 f"(a larger band_fraction shrinks it; 1 where the model "
+                 f"is the plant)")
+    return text
+
+
+def hold_error(model, share, kp, ki):
+    """How far from the reference a hold may stop when L2 integrates and
+    the feedback is a PD: y stops wherever x rests inside the band, and
+    the PD's error moves x by kp times L1's DC gain, so the part of the
+    band the inverse leaves, (1 - share)(D1 + D2), is a dead zone of
+    that width over kp |L1(1)| in the error. None where L2 does not
+    integrate, the feedback integrates or L1 does (x then moves on)."""
+    co = model.coefficients
+    if ki != 0 or not integrates(model.L2) or integrates(model.L1) or \
+            not kp > 0:
+        return None
+    g = float(np.real(np.polyval(model.L1.num[0][0], 1.0)
+                      / np.polyval(model.L1.den[0][0], 1.0)))
+    error = (1 - share) * (co['D1'] + co['D2']) / (kp * abs(g))
+    return error if np.isfinite(error) and error > 0 else None
 
 
 def ff_note(kind, preview, approx, linear_note, smooth, ratio):

@@ -90,10 +90,10 @@ def _check_name(name):
         raise ValueError(f"name must be at most {MOST_NAME} characters (it "
                          f"names the files {name[:8]}....h and .c); got "
                          f"{len(name)}")
-    if name in _C_HEADERS:
+    if name.lower() in _C_HEADERS:    # a file system may ignore case
         raise ValueError(f"name {name!r} would write {name}.h, which "
-                         f"shadows the standard header <{name}.h>; choose "
-                         f"another name")
+                         f"shadows the standard header <{name.lower()}.h>; "
+                         f"choose another name")
     return name
 
 

@@ -322,8 +322,8 @@ class ServoController(ct.NonlinearIOSystem):
     def __repr__(self):
         m = self.margins
         kind = 'sandwich' if self.compensates else 'linear'
-        head = (f"ServoController({kind}"
-                f", dt={self.dt:g}, preview={self.preview}, "
+        dt = self.dt if self.dt is True else f"{self.dt:g}"
+        head = (f"ServoController({kind}, dt={dt}, preview={self.preview}, "
                 f"kp={self.kp:.4g}, ki={self.ki:.4g}, kd={self.kd:.4g}, "
                 f"modulus_margin={m['modulus']:.3f}, "
                 f"gain_margin={m['gain']:.3g}, phase_margin="
@@ -650,6 +650,7 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
         exact = result is None
         L2n, L2d = sd.tf_arrays(model.L2)
         if exact:
+            sb.crossing_note(model, notes)
             n2, d2, p2, _ = sd.preview_inverse(L2n, L2d, feedforward,
                                                max_preview)
             n1, d1, p1, _ = sd.preview_inverse(L1n, L1d, feedforward,
@@ -723,9 +724,8 @@ def servo_controller(model, *, modulus_margin=0.6, feedforward='preview',
                     scal, notes)
                 if blends:
                     other, delays[1] = _ss(on, od, dt), total - op
-        notes.append(sl.band_note(band_fraction_out, co['D1'] + co['D2'],
-                                  integrating, band_fraction is not None,
-                                  jump, lead))
+        notes.append(sl.band_note(model, band_fraction_out, band_fraction
+                                  is not None, jump, lead, (kp, ki)))
     if feedforward is not None:
         lin_ff = _ss(fn, fd, dt)
     band_fraction, smoothing = band_fraction_out, smoothing_out
