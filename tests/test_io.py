@@ -175,6 +175,18 @@ def test_save_errors(tmp_path):
                       metadata={'x': float('nan')})
 
 
+@pytest.mark.parametrize('design', [sw.sandwich_compensator,
+                                    sw.servo_controller])
+def test_a_controller_is_not_saved_as_its_plant(design, tmp_path):
+    # it was: the file held the plant and a made-up failed identification
+    ctrl = design(sw.examples.paper_plant())
+    path = tmp_path / 'c.json'
+    with pytest.raises(TypeError, match=r"got " + type(ctrl).__name__
+                       + r" \(save its \.model"):
+        sw.save_model(ctrl, path)
+    assert not path.exists()
+
+
 def test_a_result_is_saved_with_its_verdict_and_offsets():
     """save_model of an identification result saves its model, and its
     verdict, fits and offsets under metadata['identification'] (the

@@ -428,3 +428,23 @@ def test_update_takes_a_tiny_sample_as_it_takes_zero():
     with pytest.raises(ValueError, match='u_k has peak magnitude 1e'):
         one.update(1e200, 0.0)
     assert one.n_samples == 200
+
+
+@pytest.mark.parametrize('method', ['bundle', 'gradient'])
+def test_a_negative_gain_is_no_success_and_no_start(method):
+    # b0 = d0 = 1 with m > 0 cannot carry it: the slopes went to their
+    # bound, the model fitted 0 %, and the result said success
+    plant = sw.examples.paper_plant()
+    neg = sw.SandwichSystem(plant.L1, plant.backlash, -plant.L2)
+    u = sw.examples.paper_input(2000, seed=1)
+    est = sw.RecursiveIdentifier(**neg.orders, method=method)
+    est.update_many(u, neg.simulate(u).outputs)
+    res = est.result()
+    assert not res.success
+    assert 'slope ended on its bound' in res.message
+    with pytest.raises(ValueError, match='negative-gain model'):
+        sw.RecursiveIdentifier(**neg.orders, theta0=neg.theta)
+    # the positive gain learns as before
+    est = sw.RecursiveIdentifier(**plant.orders, method=method)
+    est.update_many(u, plant.simulate(u).outputs)
+    assert est.result().success

@@ -196,6 +196,11 @@ class RecursiveIdentifier:
             theta0 = getattr(self, '_theta0_construction', self.theta0)
         self._start(self._checked_start(theta0))
 
+    def _slopes(self):
+        """The slice of m1, m2 in theta (eq. (2.5): c, a, m1, m2, ...)."""
+        im = self.orders['nc'] + self.orders['na']
+        return slice(im, im + 2)
+
     def _checked_start(self, theta0):
         """`theta0` checked (a new array), or the default start for None:
         zeros for the linear coefficients and 0.1 for m1, m2, D1, D2."""
@@ -204,6 +209,13 @@ class RecursiveIdentifier:
         if theta0 is None:
             theta0 = np.zeros(len(self.labels))
             theta0[im:im + 4] = 0.1
+        if getattr(theta0, 'sign', 1) < 0:
+            raise ValueError(
+                "theta0 is the theta of a negative-gain model (sign=-1), "
+                "which the recursive methods cannot carry (b0 = d0 = 1 "
+                "and m1, m2 > 0): identify -y from the theta of the model "
+                "with L2 negated, or use sw.identify, which fits signed "
+                "gains")
         theta0 = check_vector('theta0', theta0, len(self.labels))
         if np.any(theta0[im:im + 2] <= 0) or np.any(theta0[im + 2:im + 4] < 0):
             raise ValueError(
@@ -415,8 +427,10 @@ class RecursiveIdentifier:
         """The `IdentificationResult` for the samples processed so far.
 
         ``success`` says that samples were processed without divergence,
-        learning (not most of them covariance resets or null steps), and
-        the estimate is finite with both blocks stable; it cannot
+        learning (not most of them covariance resets or null steps), with
+        neither slope on its bound m_min (a degenerate estimate, as of
+        data with a negative gain), and the estimate is finite with both
+        blocks stable; it cannot
         compare the model with a linear baseline, as ``sw.identify(...,
         method=...)`` does on a whole record.
 
@@ -461,6 +475,15 @@ class RecursiveIdentifier:
                        f"line search found no descent): the estimate "
                        f"hardly left theta0; scale u and y towards order 1 "
                        f"(other units), or try another eta0 or theta0")
+        elif success and np.any(self._theta[self._slopes()]
+                                <= self.options['m_min']):
+            success = False         # a slope pressed on its bound
+            message = (f"processed {self.n_samples} samples, and a slope "
+                       f"ended on its bound m_min = "
+                       f"{self.options['m_min']:g}: a degenerate estimate; "
+                       f"the data's gain may be negative, which b0 = d0 = "
+                       f"1 with m1, m2 > 0 cannot carry (identify -y, or "
+                       f"use sw.identify, which fits signed gains)")
         elif success:
             message = f"processed {self.n_samples} samples"
         res = IdentificationResult(

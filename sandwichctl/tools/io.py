@@ -75,6 +75,7 @@ import os
 import re
 
 import numpy as np
+from scipy.optimize import OptimizeResult
 
 from ..model.sandwich import SandwichSystem
 from .._checks import MAX_ORDER, check_bool
@@ -253,13 +254,19 @@ def load_model(path, return_metadata=False):
 def _to_dict(model, metadata):
 
     result = None
-    if isinstance(getattr(model, 'model', None), SandwichSystem) and \
-            not isinstance(model, SandwichSystem):
+    # an identification result (an OptimizeResult); a controller or a
+    # compensator holds its model too, and is no model to save
+    if isinstance(model, OptimizeResult) and \
+            isinstance(model.get('model'), SandwichSystem):
         result, model = model, model.model
     if not isinstance(model, SandwichSystem):
         raise TypeError(f"model must be a sandwichctl.SandwichSystem (or "
                         f"the result of sw.identify); got "
-                        f"{type(model).__name__}")
+                        f"{type(model).__name__}" + (
+                            " (save its .model, the plant it was designed "
+                            "on, or pickle it)" if isinstance(getattr(
+                                model, 'model', None), SandwichSystem)
+                            else ""))
     if metadata is None:
         metadata = {}
     if not isinstance(metadata, dict):
