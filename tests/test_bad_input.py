@@ -342,6 +342,8 @@ ROWS = [
      'na'),
     ('theta_labels-negative', lambda t: sw.theta_labels(2, -1, 2, 1), VE,
      'nb'),
+    ('theta_labels-delay', lambda t: sw.theta_labels(2, 0, 2, 1, q1=-1), VE,
+     'q1'),
     ('simulate-complex', lambda t: PLANT.simulate(U * 1j), TE, 'inputs'),
     ('simulate-2d', lambda t: PLANT.simulate(np.ones((2, N))), VE,
      'inputs'),

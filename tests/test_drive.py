@@ -1,10 +1,13 @@
 """Tests of sandwichctl.data.drive: the simulated servo drive."""
 
+import pickle
+
 import numpy as np
 import pytest
 from scipy.optimize import least_squares
 from scipy.signal import lfilter
 
+import sandwichctl as sw
 from sandwichctl.data import (servo_drive, drive_reference, drive_case,
                               DRIVE_PARAMETERS)
 
@@ -117,3 +120,11 @@ def test_random_drives_vary_the_contact_law():
     from sandwichctl.data import random_drive
     laws = {random_drive(k)['params'].get('contact', 1.0) for k in range(16)}
     assert laws == {1.0, 1.5}
+
+
+def test_drive_cases_of_one_seed_are_equal():
+    # the dataclass's == raised numpy's "truth value of an array"
+    a = sw.data.drive_case(1, n=300)
+    assert a == sw.data.drive_case(1, n=300)
+    assert a != sw.data.drive_case(2, n=300)
+    assert pickle.loads(pickle.dumps(a)) == a

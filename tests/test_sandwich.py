@@ -520,3 +520,8 @@ def test_python_control_poles_zeros_and_dcgain_of_a_sandwich():
         np.sort_complex(np.r_[ct.zeros(plant.L1), ct.zeros(plant.L2)]))
     with pytest.raises(TypeError, match="no single DC gain.*linearized"):
         ct.dcgain(plant)
+
+
+def test_theta_labels_take_a_plants_orders_whole():
+    plant = sw.examples.paper_plant()
+    assert sw.theta_labels(**plant.orders) == plant.theta_labels

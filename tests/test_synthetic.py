@@ -1,9 +1,12 @@
 """Tests of sandwichctl.data.synthetic: random sandwich cases, their
 families and excitations."""
 
+import pickle
+
 import numpy as np
 import pytest
 
+import sandwichctl as sw
 from sandwichctl.data import (excitation, random_case, random_family,
                               family_specs, KINDS, SNRS, N_RANGE)
 
@@ -241,3 +244,14 @@ def test_random_family_yields_the_specified_cases():
                                                n_range=(2000, 2500))):
         assert case.spec == spec
         np.testing.assert_array_equal(case.y, random_case(**spec).y)
+
+
+def test_cases_of_one_seed_are_equal_and_pickle_whole():
+    # == compared the plants by identity (False for one seed), and y was
+    # python-control's NamedSignal, which unpickles broken
+    a = sw.data.random_case(3, n=300)
+    assert a == sw.data.random_case(3, n=300)
+    assert a != sw.data.random_case(4, n=300) and a != 1
+    back = pickle.loads(pickle.dumps(a))
+    assert back == a and type(back.y) is np.ndarray
+    np.testing.assert_array_equal(back.y[:3], a.y[:3])

@@ -431,3 +431,14 @@ def test_k_step_prediction_of_a_model_without_past_outputs_is_its_run():
     static = sw.compare(ct.tf([2.0], [1.0], 1), u, 2 * u, horizon=1,
                         plot=False)
     np.testing.assert_allclose(static.yhat, 2 * u)
+
+
+def test_an_initial_state_of_another_layout_names_the_model():
+    # python-control's "Parameter `X0`: Wrong shape" named neither
+    plant = sw.examples.paper_plant()
+    u = sw.examples.paper_input(200, seed=1)
+    G = ct.tf([1.0], [1, -0.5], 1, name='first')
+    with pytest.raises(ValueError, match="initial_state has 6 entries, and "
+                       "model 'first' has 1 state "):
+        sw.compare([plant, G], u, plant.simulate(u).outputs,
+                   initial_state=np.zeros(6), plot=False)

@@ -70,6 +70,7 @@ from dataclasses import dataclass, field
 import numba
 import numpy as np
 
+from .synthetic import same_case
 from .._checks import (MOST_SAMPLES, PLAIN_REALS, check_bool, check_int,
                        check_positive, check_nonnegative, check_option,
                        check_real, check_rng, check_signal)
@@ -628,7 +629,7 @@ def random_drive(seed):
     return dict(loop=loop, play=play, dt=dt, params=params)
 
 
-@dataclass(repr=False)
+@dataclass(repr=False, eq=False)
 class DriveCase:
     """Estimation and validation records of the servo drive.
 
@@ -659,6 +660,11 @@ class DriveCase:
     play: float
     seed: int
     params: dict = field(default_factory=dict)
+
+    def __eq__(self, other):
+        return same_case(self, other)
+
+    __hash__ = None
 
     def __repr__(self):
         return (f"DriveCase(seed={self.seed}, loop={self.loop!r}, "

@@ -49,7 +49,7 @@ negative_gain=True)`` is ``random_case(s)`` with the sign of y flipped.
   hence x, stays bounded.
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 from scipy.signal import lfilter
@@ -249,7 +249,40 @@ def _block_output(a, b, q, inp):
                    np.concatenate([[1.0], a]), inp)
 
 
-@dataclass(repr=False)
+def same_case(a, b):
+    """Whether two data-set records of one dataclass hold the same
+    values: arrays element by element (NaN equal to NaN), dicts entry by
+    entry, sandwiches by their coefficients and sample time."""
+    if type(a) is not type(b):
+        return NotImplemented
+    return all(_same(getattr(a, f.name), getattr(b, f.name))
+               for f in fields(a))
+
+
+def _same(x, y):
+    if isinstance(x, SandwichSystem) or isinstance(y, SandwichSystem):
+        return (isinstance(x, SandwichSystem)
+                and isinstance(y, SandwichSystem) and x.dt == y.dt
+                and _same(x.coefficients, y.coefficients))
+    if isinstance(x, dict) or isinstance(y, dict):
+        return (isinstance(x, dict) and isinstance(y, dict)
+                and x.keys() == y.keys()
+                and all(_same(x[k], y[k]) for k in x))
+    if isinstance(x, (np.ndarray, list, tuple)) or \
+            isinstance(y, (np.ndarray, list, tuple)):
+        try:
+            x, y = np.asarray(x), np.asarray(y)
+        except ValueError:                 # ragged
+            return len(x) == len(y) and all(map(_same, x, y))
+        if x.dtype == object or y.dtype == object:
+            return x.shape == y.shape and all(
+                _same(p, q) for p, q in zip(x.ravel(), y.ravel()))
+        return x.shape == y.shape and bool(np.array_equal(
+            x, y, equal_nan=x.dtype.kind in 'fc' and y.dtype.kind in 'fc'))
+    return bool(x == y) or (x != x and y != y)        # NaN == NaN
+
+
+@dataclass(repr=False, eq=False)
 class SyntheticCase:
     """One random identification case (returned by `random_case`).
 
@@ -311,6 +344,11 @@ class SyntheticCase:
         return dict(seed=self.seed, snr=self.snr, n=self.n,
                     input_kind=self.input_kind, integrating=self.integrating,
                     negative_gain=self.negative_gain)
+
+    def __eq__(self, other):
+        return same_case(self, other)
+
+    __hash__ = None
 
     def __repr__(self):
         o = self.orders
@@ -485,7 +523,8 @@ def random_case(seed, *, snr=None, n=None, input_kind=None,
     plant = SandwichSystem.from_coefficients(
         a, b / scale_u, c, d * scale_y, m1, m2, D1, D2, q1, q2, dt=1,
         name=f"case{seed}")
-    y_clean = plant.simulate(u).outputs
+    # a plain array: python-control's NamedSignal does not unpickle
+    y_clean = np.asarray(plant.simulate(u).outputs)
     noise = r_noise.standard_normal(n)
     if np.isfinite(snr):
         y = y_clean + noise * np.sqrt(np.var(y_clean) / snr)

@@ -688,8 +688,11 @@ class SandwichSystem(ct.InterconnectedSystem):
     __repr__ = __str__
 
 
-def theta_labels(na, nb, nc, nd):
+def theta_labels(na, nb, nc, nd, q1=0, q2=0):
     """Names of the entries of the parameter vector of eq. (2.5).
+
+    The delays q1 and q2 name no parameter; they are taken (and checked)
+    so that ``theta_labels(**plant.orders)`` works.
 
     Examples
     --------
@@ -697,8 +700,8 @@ def theta_labels(na, nb, nc, nd):
     >>> sw.theta_labels(na=2, nb=0, nc=2, nd=1)
     ['c1', 'c2', 'a1', 'a2', 'm1', 'm2', 'D1', 'D2', 'd1']
     """
-    na, nb, nc, nd = (check_order(n, v) for n, v in
-                      zip(('na', 'nb', 'nc', 'nd'), (na, nb, nc, nd)))
+    na, nb, nc, nd, _, _ = (check_order(n, v) for n, v in zip(
+        ('na', 'nb', 'nc', 'nd', 'q1', 'q2'), (na, nb, nc, nd, q1, q2)))
     return ([f"c{i}" for i in range(1, nc + 1)]
             + [f"a{i}" for i in range(1, na + 1)]
             + ['m1', 'm2', 'D1', 'D2']

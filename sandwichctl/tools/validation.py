@@ -557,6 +557,16 @@ def _simulate(sys, u, initial_state, timepts):
     _check_siso(sys)
     t = _default_timepts(sys, u.size) if timepts is None else timepts
     x0 = 0.0 if initial_state is None else initial_state
+    if initial_state is not None and not isinstance(sys, SandwichSystem):
+        n = (ct.ss(sys).nstates if isinstance(sys, ct.TransferFunction)
+             else sys.nstates)
+        size = np.size(initial_state)
+        if size not in (1, n):
+            raise ValueError(
+                f"initial_state has {size} entries, and model {sys.name!r} "
+                f"has {n} state{'' if n == 1 else 's'} (one initial state serves several models "
+                f"only when they share a state layout: compare them one "
+                f"by one)")
     # An unstable model overflows; that is reported below, not warned.
     with _overflow_reported():
         if isinstance(sys, SandwichSystem):
