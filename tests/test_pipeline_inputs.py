@@ -112,6 +112,14 @@ def test_history_methods_refuse_a_result_without_history():
         with pytest.raises(ValueError, match='no history'):
             call()
     assert sw.parameter_error(res.theta, PLANT.theta) < 1e-3
+    # a recursive result without one says why: it named the recursive
+    # methods, the result's own
+    est = sw.RecursiveIdentifier(**O, keep_history=False)
+    est.update_many(U[:100], Y[:100])
+    with pytest.raises(ValueError, match='ran with keep_history=False'):
+        est.result().parameter_error(PLANT.theta)
+    with pytest.raises(ValueError, match='saw no sample'):
+        sw.RecursiveIdentifier(**O).result().plot_convergence()
 
 
 def test_plot_convergence_checks_its_arguments():

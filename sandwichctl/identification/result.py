@@ -479,10 +479,16 @@ class IdentificationResult(OptimizeResult):
         estimate)."""
         history = getattr(self, 'history', None)
         if history is None or np.size(history) == 0:
+            method = self.get('method')
+            why = ("only the recursive methods ('bundle', 'gradient', "
+                   "'rpem') keep one" if method not in (
+                       'bundle', 'gradient', 'rpem') else
+                   "its RecursiveIdentifier saw no sample" if not
+                   self.get('nit') else
+                   "its RecursiveIdentifier ran with keep_history=False")
             raise ValueError(
-                f"this result ({self.get('method')!r}) has no history of "
-                f"estimates: only the recursive methods ('bundle', "
-                f"'gradient', 'rpem') keep one; for the final estimate use "
+                f"this result ({method!r}) has no history of estimates: "
+                f"{why}; for the final estimate use "
                 f"sw.parameter_error(res.theta, theta_true)")
         return history
 
