@@ -18,6 +18,7 @@ Fig. 2 and the three versions of Fig. 3 to the output folder.
 """
 
 import argparse
+import math
 import os
 import sys
 
@@ -126,6 +127,25 @@ def _demo(args):
     return 0
 
 
+def _number(kind, low, above=False):
+    """An argparse type: a finite `kind` >= `low` (> `low` with `above`),
+    checked before the demo spends a minute on a value it refuses."""
+    def read(text):
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"expected {'an integer' if kind is int else 'a number'}; "
+                f"got {text!r}") from None
+        if not math.isfinite(value) or value < low or (above and
+                                                       value == low):
+            raise argparse.ArgumentTypeError(
+                f"expected a finite number {'>' if above else '>='} {low}; "
+                f"got {text}")
+        return value
+    return read
+
+
 def main(argv=None):
     """Entry point of the ``sandwichctl`` command."""
     parser = argparse.ArgumentParser(
@@ -135,14 +155,18 @@ def main(argv=None):
     demo = sub.add_parser('demo', help="a servo loop on a simulated axis, "
                           "then the paper's Section 5")
     demo.add_argument('--out', default='out', help='output folder')
-    demo.add_argument('--samples', type=int, default=20000)
-    demo.add_argument('--seed', type=int, default=0)
+    demo.add_argument('--samples', type=_number(int, 100), default=20000,
+                      help='samples of each Section 5 run (at least 100)')
+    demo.add_argument('--seed', type=_number(int, 0), default=0)
     demo.add_argument('--no-servo', action='store_true',
                       help='skip the servo loop on the simulated axis')
-    demo.add_argument('--snr', type=float, default=46.5,
+    demo.add_argument('--snr', type=_number(float, 0, above=True),
+                      default=46.5,
                       help='SNR of the noisy runs, read in turn as a '
                            'variance ratio, an amplitude ratio and in dB')
     args = parser.parse_args(argv)
+    if os.path.exists(args.out) and not os.path.isdir(args.out):
+        parser.error(f"--out {args.out!r} is a file, not a folder")
     return {'demo': _demo}[args.command](args)
 
 

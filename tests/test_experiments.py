@@ -220,3 +220,30 @@ def test_absolute_epoch_times_are_evenly_spaced():
     t[300] += 0.0004
     with pytest.raises(ValueError, match="not evenly spaced"):
         sw.as_experiments(ct.TimeResponseData(t, y, inputs=u))
+
+
+def test_experiments_built_from_one_record_or_one_pair_read_them_whole():
+    # list() of a record gave (time, outputs): the time vector became u
+    plant = sw.examples.paper_plant()
+    u = sw.examples.paper_input(400, seed=1)
+    y = plant.simulate(u).outputs
+    record = ct.TimeResponseData(0.01 * np.arange(u.size), y, inputs=u)
+    data = sw.Experiments(record, None)
+    assert len(data) == 1 and data.dt == 0.01
+    np.testing.assert_array_equal(data[0][0], u)
+    pair = sw.Experiments((u, y), 0.1)
+    assert len(pair) == 1 and pair.dt == 0.1
+    np.testing.assert_array_equal(pair[0][1], y)
+
+
+def test_refine_as_an_empty_dict_refines_with_the_defaults():
+    plant = sw.examples.paper_plant()
+    u = sw.examples.paper_input(1500, seed=1)
+    y = plant.simulate(u).outputs
+    got = [sw.identify(u, y, **plant.orders, method='bundle', refine=r)
+           for r in ({}, True)]
+    assert got[0].method == got[1].method == 'bundle+refine'
+    np.testing.assert_array_equal(got[0].theta, got[1].theta)
+    # and False, the documented default, is no error for 'oe'
+    assert sw.identify(u[:600], y[:600], **plant.orders,
+                       refine=False).success

@@ -114,6 +114,23 @@ def test_demo_without_the_servo_loop(tmp_path, capsys):
     assert not (tmp_path / 'servo_loop.png').exists()
 
 
+@pytest.mark.parametrize('args, says', [
+    (['--snr', 'nan'], 'argument --snr: expected a finite number > 0'),
+    (['--snr', '-3'], 'argument --snr: expected a finite number > 0'),
+    (['--samples', '3'], 'argument --samples: expected a finite number >= '
+                         '100'),
+    (['--samples', 'abc'], "argument --samples: expected an integer"),
+    (['--seed', '-1'], 'argument --seed: expected a finite number >= 0'),
+    (['--out', __file__], 'is a file, not a folder')])
+def test_demo_options_are_checked_before_it_runs(args, says, capsys):
+    # --snr nan ran the noise-free part, wrote a figure, then raised
+    from sandwichctl.__main__ import main
+    with pytest.raises(SystemExit) as exit_:
+        main(['demo', '--no-servo', *args])
+    assert exit_.value.code == 2
+    assert says in capsys.readouterr().err
+
+
 @pytest.fixture(scope='module')
 def noisy_bundle_errors():
     """Final bundle error of the demo's record (seed 0, 20,000 samples)

@@ -81,3 +81,23 @@ def test_an_unstable_loop_has_a_negative_phase_margin():
                                              ct.tf([1], [1, -0.5, 0], 1))
     assert tc.pole_radius > 1
     assert tc.margins[1] == pytest.approx(-25.3, abs=0.1)
+
+
+@pytest.mark.parametrize('change, error, match', [
+    (dict(preview=-1), ValueError, 'preview must be an integer >= 0'),
+    (dict(preview=2.0), TypeError, 'preview must be an integer'),
+    (dict(preview='2'), TypeError, 'preview must be an integer'),
+    (dict(kp='a'), TypeError, 'kp must be a real number'),
+    (dict(feedforward=ct.tf([1.0], [1, 0], 0.5)), ValueError,
+     'feedback and feedforward must have the same sampling time')])
+def test_a_tracking_controller_built_by_hand_checks_its_parts(change, error,
+                                                              match):
+    # they failed later, inside closed_loop_response ("negative dimensions
+    # are not allowed", "Unknown format code 'g'")
+    c = sw.tracking_controller(sw.sandwich_compensator(PLANT).design_plant)
+    parts = dict(feedback=c.feedback, feedforward=c.feedforward,
+                 preview=c.preview, design_plant=c.design_plant, kp=c.kp,
+                 ki=c.ki)
+    assert sw.TrackingController(**parts).preview == c.preview
+    with pytest.raises(error, match=match):
+        sw.TrackingController(**dict(parts, **change))

@@ -16,7 +16,7 @@ from ._servo_design import (at_one, frequency_grid, loop_radius, design_pid,
                             phase_crossings, pid_tf)
 from .loop import phase_margin
 from .._checks import (check_discrete_siso_tf, common_dt, check_bool,
-                       check_finite, check_gain)
+                       check_finite, check_gain, check_int)
 
 __all__ = ['TrackingController', 'tracking_controller']
 
@@ -77,6 +77,11 @@ class TrackingController:
                           ('design_plant', design_plant)):
             if sys is not None or name == 'feedback':
                 check_discrete_siso_tf(name, sys)
+                common_dt('feedback', feedback.dt, name, sys.dt)
+        # checked here: a bad one failed later, inside closed_loop_response
+        preview = check_int('preview', preview, minimum=0)
+        kp, ki = (None if v is None else check_finite(k, v)
+                  for k, v in (('kp', kp), ('ki', ki)))
         self.feedback = feedback
         self.feedforward = feedforward
         self.preview = preview

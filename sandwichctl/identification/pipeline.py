@@ -120,7 +120,8 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
         Sampling time of the returned model.
     refine : bool or dict, optional
         Recursive methods only: follow the recursive estimate by `refine`
-        (a dict gives its keyword arguments). Default False.
+        (a dict gives its keyword arguments; ``{}`` refines with its
+        defaults, as True does). Default False.
     progress : bool, optional
         Show progress bars (tqdm) on long runs.
     integrators : int or 'auto', optional
@@ -333,7 +334,9 @@ def _method_options(method, options, offsets, arguments):
     were given (not None) and apply to it, and `options`; one that does
     not apply raises, naming the method."""
     method_options(method, {})                 # checks `method`
-    given = {k: v for k, v in arguments.items() if v is not None}
+    # refine=False, the documented default, is as good as not given
+    given = {k: v for k, v in arguments.items()
+             if v is not None and not (k == 'refine' and v is False)}
     wrong = sorted(k for k in given if method not in APPLIES[k])
     if wrong:
         raise TypeError(f"{wrong[0]} does not apply to method={method!r}; "
@@ -400,8 +403,8 @@ def _identify_recursive(u, y, orders, method, kw):
     # judged finite and stable by the estimator itself
     result = est.result(elapsed=time.perf_counter() - start)
     facts = {}
-    if kw['refine']:
-        refine = kw['refine']
+    if kw['refine'] is not None and kw['refine'] is not False:
+        refine = kw['refine']           # True, or a dict ({}: defaults)
         kwargs = dict(progress=kw['progress'])
         kwargs.update(refine if isinstance(refine, dict) else {})
         refined = _refine(result.model, u, y, **kwargs)

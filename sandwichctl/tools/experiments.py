@@ -46,7 +46,10 @@ class Experiments(list):
     def __init__(self, pairs, dt, _checked=False):
         if not _checked:             # built by a user: read as any data
             try:
-                pairs = list(pairs)
+                # a record or one (u, y) pair is one experiment as it is:
+                # list() made a record's (time, outputs) the pair
+                if not isinstance(pairs, (ct.TimeResponseData, tuple)):
+                    pairs = list(pairs)
             except TypeError:
                 raise TypeError(f"pairs must be a list of (u, y) pairs; got "
                                 f"{type(pairs).__name__}") from None
