@@ -527,3 +527,14 @@ def test_integrating_plant_is_compensated(block):
             demo = sw.closed_loop_demo(plant, plant, reference=v)
         assert np.all(np.isfinite(demo.with_compensation.outputs))
         assert demo.ratio < 0.05
+
+
+@pytest.mark.parametrize('scale', [1e200, 1e-200])
+def test_the_demo_compares_loops_at_any_reference_scale(scale):
+    # the RMS errors overflowed to inf (ratio nan) at 1e200 and underflowed
+    # to 0 (ratio nan) at 1e-200
+    plant = sw.examples.paper_plant()
+    demo = sw.closed_loop_demo(plant, plant, scale * sw.steps_and_sines())
+    assert np.isfinite(demo.rms_with) and demo.rms_with > 0
+    assert np.isfinite(demo.rms_without) and demo.rms_without > 0
+    assert np.isfinite(demo.ratio)

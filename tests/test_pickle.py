@@ -260,3 +260,15 @@ def test_negative_gain_theta_survives_pickling():
     assert back.gain_sign == -1
     np.testing.assert_array_equal(back.simulate(U).outputs,
                                   plant.normalized().simulate(U).outputs)
+
+
+def test_a_copied_result_is_still_a_result():
+    # dict.copy gave a plain dict
+    plant = sw.examples.paper_plant()
+    u = sw.examples.paper_input(600, seed=1)
+    y = plant.simulate(u).outputs
+    for res in (sw.identify(u, y, **plant.orders, integrators=0),
+                sw.identify_linear(u, y, nb=2, nf=4)):
+        copied = res.copy()
+        assert type(copied) is type(res) and copied is not res
+        assert repr(copied) == repr(res) and copied.fit == res.fit

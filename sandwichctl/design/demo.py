@@ -187,5 +187,11 @@ def closed_loop_demo(plant, model, reference=None, smoothing=0.0,
 
 
 def _rms(e):
-    with np.errstate(over='ignore'):     # a loop that diverged: inf
-        return float(np.sqrt(np.mean(np.square(e))))
+    """RMS of `e` scaled by its peak first, so that errors of 1e200 do
+    not overflow nor those of 1e-200 underflow (inf where the loop
+    diverged)."""
+    e = np.asarray(e, dtype=float)
+    peak = float(np.max(np.abs(e))) if e.size else 0.0
+    if not (np.isfinite(peak) and peak > 0):
+        return peak
+    return peak * float(np.sqrt(np.mean(np.square(e / peak))))

@@ -120,6 +120,11 @@ class LinearIdentificationResult(OptimizeResult):
         ``MIN_FIT`` (5 %, the bar of `identify`), and what happened.
     """
 
+    def copy(self):
+        """A shallow copy, a `LinearIdentificationResult` as this one (dict's
+        own copy gave a plain dict, without the summary and methods)."""
+        return type(self)(self)
+
     def __repr__(self):
         num = np.trim_zeros(self.model.num[0][0], 'f')
         den = self.model.den[0][0]

@@ -410,6 +410,11 @@ class IdentificationResult(OptimizeResult):
         if model is not None and theta is not None:   # theta carries d0
             self['theta'] = signed_theta(theta, model.gain_sign)
 
+    def copy(self):
+        """A shallow copy, a `IdentificationResult` as this one (dict's
+        own copy gave a plain dict, without the summary and methods)."""
+        return type(self)(self)
+
     def __repr__(self):
         if 'theta' not in self:
             return f"IdentificationResult({dict.__repr__(self)})"
