@@ -268,15 +268,11 @@ def _same(x, y):
         return (isinstance(x, dict) and isinstance(y, dict)
                 and x.keys() == y.keys()
                 and all(_same(x[k], y[k]) for k in x))
-    if isinstance(x, (np.ndarray, list, tuple)) or \
-            isinstance(y, (np.ndarray, list, tuple)):
-        try:
-            x, y = np.asarray(x), np.asarray(y)
-        except ValueError:                 # ragged
-            return len(x) == len(y) and all(map(_same, x, y))
-        if x.dtype == object or y.dtype == object:
-            return x.shape == y.shape and all(
-                _same(p, q) for p, q in zip(x.ravel(), y.ravel()))
+    if isinstance(x, (list, tuple)) or isinstance(y, (list, tuple)):
+        return (isinstance(x, (list, tuple)) and isinstance(y, (list, tuple))
+                and len(x) == len(y) and all(map(_same, x, y)))
+    if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
+        x, y = np.asarray(x), np.asarray(y)
         return x.shape == y.shape and bool(np.array_equal(
             x, y, equal_nan=x.dtype.kind in 'fc' and y.dtype.kind in 'fc'))
     return bool(x == y) or (x != x and y != y)        # NaN == NaN

@@ -6,7 +6,8 @@ into a spike."""
 import numpy as np
 import control as ct
 
-from ._servo_design import at_one, low_frequency_gain, preview_inverse
+from ._servo_design import (at_one, low_frequency_gain, preview_inverse,
+                            tf_arrays)
 from .._checks import warn
 
 #: the exact inverse of a known model notes where its slope lines cross
@@ -81,8 +82,7 @@ def crossing_note(model, notes):
     band = 0.5 * (co['m1'] + co['m2']) * (co['D1'] + co['D2'])
     if abs(v) > CROSSING_BANDS * band:
         return
-    n, d, integrating = low_frequency_gain(*(np.asarray(
-        a, dtype=float) for a in (model.L2.num[0][0], model.L2.den[0][0])))
+    n, d, integrating = low_frequency_gain(*tf_arrays(model.L2))
     at_y = (f", y = {v * n / d:.4g} at rest" if not integrating else "")
     text = (f"the backlash's slope lines cross at x = {x:.4g} (backlash "
             f"output v = {v:.4g}{at_y}; m1 = {co['m1']:.4g}, m2 = "

@@ -14,8 +14,9 @@ from ..model.sandwich import SandwichSystem
 from .._checks import PINNED
 from .inverse import _fmt_roots
 from ._servo_design import (AT_ONE, FF_ACTIVITY, RINGING, at_one,
-                            design_pid, loop_margins, low_frequency_sign,
-                            pid_tf, series_length, tf_arrays)
+                            design_pid, loop_margins, low_frequency_gain,
+                            low_frequency_sign, pid_tf, series_length,
+                            tf_arrays)
 from ._servo_data import nyquist_tamed
 
 
@@ -359,13 +360,14 @@ def hold_error(model, share, kp, ki):
     that width over kp |L1(1)| in the error. None where L2 does not
     integrate, the feedback integrates or L1 does (x then moves on)."""
     co = model.coefficients
-    if ki != 0 or not integrates(model.L2) or integrates(model.L1) or \
-            not kp > 0:
+    if ki != 0 or not kp > 0 or not integrates(model.L2):
         return None
-    g = float(np.real(np.polyval(model.L1.num[0][0], 1.0)
-                      / np.polyval(model.L1.den[0][0], 1.0)))
-    error = (1 - share) * (co['D1'] + co['D2']) / (kp * abs(g))
-    return error if np.isfinite(error) and error > 0 else None
+    n, d, integrating = low_frequency_gain(*tf_arrays(model.L1))
+    if integrating:
+        return None
+    with np.errstate(divide='ignore', invalid='ignore'):
+        error = (1 - share) * (co['D1'] + co['D2']) * abs(d / (kp * n))
+    return float(error) if np.isfinite(error) and error > 0 else None
 
 
 def ff_note(kind, preview, approx, linear_note, smooth, ratio):

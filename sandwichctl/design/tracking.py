@@ -77,7 +77,8 @@ class TrackingController:
                           ('design_plant', design_plant)):
             if sys is not None or name == 'feedback':
                 check_discrete_siso_tf(name, sys)
-                common_dt('feedback', feedback.dt, name, sys.dt)
+                if name != 'feedback':
+                    common_dt('feedback', feedback.dt, name, sys.dt)
         # checked here: a bad one failed later, inside closed_loop_response
         preview = check_int('preview', preview, minimum=0)
         kp, ki = (None if v is None else check_finite(k, v)

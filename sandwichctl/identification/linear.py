@@ -46,7 +46,8 @@ from scipy.optimize import OptimizeResult
 from ._data import (excitation_order, input_offset, input_order_text,
                     prepare, scale, scaled, with_shift)
 from ._linear import fit_oe_auto, fit_output, max_root, RADIUS
-from .result import INPUT_OFFSET, MIN_FIT, input_offset_text
+from .result import (INPUT_OFFSET, MIN_FIT, IdentificationResult,
+                     input_offset_text)
 from .._checks import (check_int, check_positive, check_tolerance, check_dt,
                        serial_blas)
 from .._checks import MOST_ROUNDS, check_data_scale
@@ -120,10 +121,7 @@ class LinearIdentificationResult(OptimizeResult):
         ``MIN_FIT`` (5 %, the bar of `identify`), and what happened.
     """
 
-    def copy(self):
-        """A shallow copy, a `LinearIdentificationResult` as this one (dict's
-        own copy gave a plain dict, without the summary and methods)."""
-        return type(self)(self)
+    copy = IdentificationResult.copy
 
     def __repr__(self):
         num = np.trim_zeros(self.model.num[0][0], 'f')

@@ -296,9 +296,10 @@ def identify(u, y=None, na=None, nb=None, nc=None, nd=None, q1=1, q2=1,
     result.offsets = with_shift(offset_info, estimated)
     moving = _excitation(result.model, us)
     result.excitation = np.nan if moving is None else moving
-    got, need, _ = order = _input_order(result, us, orders)
+    order = _input_order(result, us, orders)
+    # L1's free coefficients (need less b0) and m1, m2, D1, D2
     moves = None if moving is None else (
-        int(round(moving * sum(np.size(u) for u in us))), need + 3)
+        int(round(moving * sum(np.size(u) for u in us))), order[1] + 3)
     judge(result, verdict(excitation=moving, input_offset=input_offset(us),
                           input_order=order, backlash_moves=moves))
     _warn_mean_integrating(result, offsets)

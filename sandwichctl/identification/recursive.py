@@ -29,7 +29,7 @@ import dataclasses
 
 import numpy as np
 
-from ._predictor import padding, stable_and_finite
+from ._predictor import padding, stable_and_finite, _idx
 from ._recursive import (one_qp_warning, bundle_run, gradient_run,
                          rpem_run, LONG, SHORT, NULL, STOP, SKIP,
                          SUBGRADIENT, RPEM_OK, RPEM_LIMITED, RPEM_REJECTED,
@@ -195,11 +195,6 @@ class RecursiveIdentifier:
             # reset(theta0=...) moved it)
             theta0 = getattr(self, '_theta0_construction', self.theta0)
         self._start(self._checked_start(theta0))
-
-    def _slopes(self):
-        """The slice of m1, m2 in theta (eq. (2.5): c, a, m1, m2, ...)."""
-        im = self.orders['nc'] + self.orders['na']
-        return slice(im, im + 2)
 
     def _checked_start(self, theta0):
         """`theta0` checked (a new array), or the default start for None:
@@ -475,7 +470,7 @@ class RecursiveIdentifier:
                        f"line search found no descent): the estimate "
                        f"hardly left theta0; scale u and y towards order 1 "
                        f"(other units), or try another eta0 or theta0")
-        elif success and np.any(self._theta[self._slopes()]
+        elif success and np.any(self._theta[_idx(self._o)[1]:][:2]
                                 <= self.options['m_min']):
             success = False         # a slope pressed on its bound
             message = (f"processed {self.n_samples} samples, and a slope "

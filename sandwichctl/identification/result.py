@@ -411,8 +411,8 @@ class IdentificationResult(OptimizeResult):
             self['theta'] = signed_theta(theta, model.gain_sign)
 
     def copy(self):
-        """A shallow copy, a `IdentificationResult` as this one (dict's
-        own copy gave a plain dict, without the summary and methods)."""
+        """A shallow copy of this result, of its own class (dict's own
+        copy gave a plain dict, without the summary and methods)."""
         return type(self)(self)
 
     def __repr__(self):

@@ -564,9 +564,9 @@ def _simulate(sys, u, initial_state, timepts):
         if size not in (1, n):
             raise ValueError(
                 f"initial_state has {size} entries, and model {sys.name!r} "
-                f"has {n} state{'' if n == 1 else 's'} (one initial state serves several models "
-                f"only when they share a state layout: compare them one "
-                f"by one)")
+                f"has {n} state{'' if n == 1 else 's'} (one initial state "
+                f"serves several models only when they share a state "
+                f"layout: compare them one by one)")
     # An unstable model overflows; that is reported below, not warned.
     with _overflow_reported():
         if isinstance(sys, SandwichSystem):
